@@ -1,0 +1,74 @@
+#include "engine/cli/args.h"
+
+#include <charconv>
+
+namespace yelan::cli {
+
+Args::Args(std::string command, std::vector<std::string> argv, std::set<std::string> value_options,
+           std::set<std::string> flags)
+    : command_(std::move(command)) {
+  const std::string hint = " (see 'yelan " + command_ + " --help')";
+  bool only_positionals = false;
+  for (std::size_t i = 0; i < argv.size(); ++i) {
+    const std::string& a = argv[i];
+    if (only_positionals || a.size() < 2 || a[0] != '-' || a == "-") {
+      positionals_.push_back(a);
+      continue;
+    }
+    if (a == "--") {
+      only_positionals = true;
+      continue;
+    }
+    std::string name = a, val;
+    bool has_inline = false;
+    if (auto eq = a.find('='); eq != std::string::npos && a.rfind("--", 0) == 0) {
+      name = a.substr(0, eq);
+      val = a.substr(eq + 1);
+      has_inline = true;
+    }
+    if (value_options.count(name)) {
+      if (!has_inline) {
+        if (i + 1 >= argv.size()) throw UsageError("option " + name + " needs a value" + hint);
+        val = argv[++i];
+      }
+      if (values_.count(name)) throw UsageError("option " + name + " given twice" + hint);
+      values_[name] = val;
+    } else if (flags.count(name)) {
+      if (has_inline) throw UsageError("option " + name + " takes no value" + hint);
+      flags_.insert(name);
+    } else {
+      throw UsageError("unknown option '" + name + "'" + hint);
+    }
+  }
+}
+
+std::optional<std::string> Args::value(const std::string& name) const {
+  auto it = values_.find(name);
+  if (it == values_.end()) return std::nullopt;
+  return it->second;
+}
+
+std::string Args::value_or(const std::string& name, const std::string& fallback) const {
+  return value(name).value_or(fallback);
+}
+
+int Args::int_value_or(const std::string& name, int fallback, int min, int max) const {
+  auto v = value(name);
+  if (!v) return fallback;
+  int n = 0;
+  auto [ptr, ec] = std::from_chars(v->data(), v->data() + v->size(), n);
+  if (v->empty() || ec != std::errc() || ptr != v->data() + v->size() || n < min || n > max)
+    throw UsageError("option " + name + " expects an integer in [" + std::to_string(min) + ", " +
+                     std::to_string(max) + "], got '" + *v + "'");
+  return n;
+}
+
+void Args::expect_positionals(std::size_t min, std::size_t max) const {
+  const std::size_t n = positionals_.size();
+  if (n >= min && n <= max) return;
+  std::string want = min == max ? std::to_string(min) : std::to_string(min) + " to " + std::to_string(max);
+  throw UsageError("expected " + want + " argument(s), got " + std::to_string(n) +
+                   " (see 'yelan " + command_ + " --help')");
+}
+
+}  // namespace yelan::cli

@@ -1,0 +1,38 @@
+// Command-line parsing shared by every subcommand: `--name value`, `--name=value`,
+// boolean `--flag`, and positionals. Anything not declared is a usage error.
+#pragma once
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace yelan::cli {
+
+// Exit code 2: the user asked for something malformed.
+struct UsageError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class Args {
+ public:
+  Args(std::string command, std::vector<std::string> argv, std::set<std::string> value_options,
+       std::set<std::string> flags);
+
+  bool flag(const std::string& name) const { return flags_.count(name) > 0; }
+  std::optional<std::string> value(const std::string& name) const;
+  std::string value_or(const std::string& name, const std::string& fallback) const;
+  int int_value_or(const std::string& name, int fallback, int min, int max) const;
+  const std::vector<std::string>& positionals() const { return positionals_; }
+  // Throws UsageError unless the count of positionals is within [min, max].
+  void expect_positionals(std::size_t min, std::size_t max) const;
+
+ private:
+  std::string command_;
+  std::map<std::string, std::string> values_;
+  std::set<std::string> flags_;
+  std::vector<std::string> positionals_;
+};
+
+}  // namespace yelan::cli

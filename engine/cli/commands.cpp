@@ -1,0 +1,45 @@
+#include "engine/cli/commands.h"
+
+namespace yelan::cli {
+
+const std::vector<Command>& commands() {
+  static const std::vector<Command> table = {
+      {"run", "events -> 3D poses, live or from a file",
+       "usage: yelan run --weights W [--camera | FILE] --rate 50 [--out poses.csv|.json|.h5]\n",
+       nullptr, "streaming pose estimation (issue 8)"},
+      {"sim", "simulate a dancer seen by an event camera, with labels",
+       "usage: yelan sim --preset NAME|--config scene.json --seed N --duration D -o out.yelan.h5\n",
+       nullptr, "the motion-to-event simulator (issue 6)"},
+      {"train", "train the mask or pose network on CPU",
+       "usage: yelan train --stage mask|pose --config model.json --data DIR|--sim PRESET\n",
+       nullptr, "the CPU trainer (issue 7)"},
+      {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
+       "usage: yelan eval --weights W --data DIR|--sim PRESET [--json OUT]\n",
+       nullptr, "evaluation (issue 7)"},
+      {"convert", "convert an event file between formats",
+       "usage: yelan convert IN OUT\n", nullptr, "event readers and writers (issue 5)"},
+      {"info", "describe an event file",
+       "usage: yelan info FILE [--json]\n", nullptr, "event readers (issue 5)"},
+      {"repr", "TORE volumes and baseline frames from an event file",
+       "usage: yelan repr --type tore|count|voxel|surface --at T1,T2,... IN OUT.h5\n",
+       nullptr, "representations (issue 5)"},
+      {"record", "record a live camera to a file",
+       "usage: yelan record --duration 10s out.aedat4\n", nullptr, "the libusb driver (issue 5)"},
+      {"devices", "list attached event cameras",
+       "usage: yelan devices\n", nullptr, "the libusb driver (issue 5)"},
+      {"bench", "benchmarks: kernels, events, run, early-exit",
+       "usage: yelan bench kernels|events|run|early-exit [--quick] [--json]\n",
+       nullptr, "the kernel benchmarks (issue 3)"},
+      {"model", "network summaries and forward passes",
+       "usage: yelan model summary --config X [--json]\n"
+       "       yelan model forward --weights W --input IN.h5 --output OUT.h5\n",
+       nullptr, "layers and networks (issue 4)"},
+      {"weights", "inspect, compare, verify and initialise HDF5 weights",
+       "usage: yelan weights inspect|diff|verify FILE\n"
+       "       yelan weights init --config NAME|FILE --seed N -o W.h5\n",
+       nullptr, "HDF5 weights (issue 4)"},
+  };
+  return table;
+}
+
+}  // namespace yelan::cli

@@ -1,0 +1,28 @@
+// Picks one family's kernel table for an ISA. A family that has no variant for an ISA
+// falls back to the next one down (avx512 -> avx2 -> scalar, neon -> scalar), and the
+// table's own `isa` field says which one actually runs.
+#pragma once
+#include "kernels/cpu.h"
+
+namespace yelan::kernels {
+
+template <class Table>
+struct Variants {
+  const Table* scalar = nullptr;
+  const Table* avx2 = nullptr;
+  const Table* avx512 = nullptr;
+  const Table* neon = nullptr;
+};
+
+template <class Table>
+const Table& select_variant(const Variants<Table>& v, Isa isa) {
+  switch (isa) {
+    case Isa::avx512: if (v.avx512) return *v.avx512; [[fallthrough]];
+    case Isa::avx2: if (v.avx2) return *v.avx2; break;
+    case Isa::neon: if (v.neon) return *v.neon; break;
+    case Isa::scalar: break;
+  }
+  return *v.scalar;
+}
+
+}  // namespace yelan::kernels

@@ -1,0 +1,110 @@
+#include <catch2/catch.hpp>
+
+#include <sstream>
+
+#include "engine/cli/args.h"
+#include "engine/cli/cli.h"
+#include "engine/cli/commands.h"
+#include "engine/threads.h"
+#include "kernels/cpu.h"
+#include "test_util.h"
+
+using yelan::cli::Args;
+using yelan::cli::UsageError;
+
+namespace {
+struct Result {
+  int code;
+  std::string out, err;
+};
+Result cli(std::vector<std::string> argv) {
+  std::ostringstream out, err;
+  int code = yelan::cli::run(argv, out, err);
+  return {code, out.str(), err.str()};
+}
+bool has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+}  // namespace
+
+TEST_CASE("yelan --version names the version, the chosen ISA and the CPU features", "[cli]") {
+  Result r = cli({"--version"});
+  CHECK(r.code == 0);
+  CHECK(has(r.out, "yelan 0."));
+  CHECK(has(r.out, std::string("isa: ") + yelan::kernels::isa_name(yelan::kernels::active_isa())));
+  CHECK(has(r.out, "cpu features: " + yelan::kernels::cpu_features().describe()));
+  CHECK(has(r.out, "HDF5 1."));
+  CHECK(has(r.out, "libusb 1."));
+}
+
+TEST_CASE("bad usage exits 2 with a one-line message", "[cli]") {
+  struct Case { std::vector<std::string> argv; const char* says; };
+  for (const Case& c : std::vector<Case>{
+           {{}, "usage: yelan"},
+           {{"--bogus"}, "unknown option '--bogus'"},
+           {{"frobnicate"}, "unknown command 'frobnicate'"},
+           {{"--threads", "0", "--version"}, "--threads expects"},
+           {{"--threads", "many", "--version"}, "--threads expects"},
+           {{"--version", "--threads"}, "--threads needs a value"},
+           {{"--isa", "quantum", "--version"}, "--isa expects"},
+       }) {
+    INFO(c.says);
+    Result r = cli(c.argv);
+    CHECK(r.code == 2);
+    CHECK(has(r.err, c.says));
+    CHECK(r.out.empty());
+  }
+}
+
+TEST_CASE("global --isa forces the kernel ISA and --threads the thread count", "[cli]") {
+  yelan::test::IsaGuard guard;
+  const int saved_threads = yelan::threads();
+  for (auto isa : yelan::test::supported_isas()) {
+    Result r = cli({"--isa", yelan::kernels::isa_name(isa), "--threads=1", "--version"});
+    CHECK(r.code == 0);
+    CHECK(has(r.out, std::string("isa: ") + yelan::kernels::isa_name(isa)));
+    CHECK(has(r.out, "threads: 1\n"));
+  }
+#if defined(__x86_64__)
+  Result r = cli({"--isa", "neon", "--version"});
+  CHECK(r.code == 2);
+  CHECK(has(r.err, "not supported on this CPU"));
+#endif
+  yelan::set_threads(saved_threads);
+}
+
+TEST_CASE("every command answers --help; one not built yet fails with exit 1", "[cli]") {
+  for (const auto& c : yelan::cli::commands()) {
+    INFO(c.name);
+    Result h = cli({c.name, "--help"});
+    CHECK(h.code == 0);
+    CHECK(has(h.out, "usage: yelan " + c.name));
+    if (!c.handler) {
+      Result r = cli({c.name});
+      CHECK(r.code == 1);
+      CHECK(has(r.err, "not built yet"));
+    }
+  }
+  Result g = cli({"--help"});
+  CHECK(g.code == 0);
+  for (const auto& c : yelan::cli::commands()) CHECK(has(g.out, "  " + c.name));
+}
+
+TEST_CASE("Args parses values, flags and positionals and rejects the rest", "[cli]") {
+  Args a("x", {"in.h5", "--rate", "50", "--json", "--out=o.csv", "--", "--literal"},
+         {"--rate", "--out"}, {"--json"});
+  CHECK(a.positionals() == std::vector<std::string>{"in.h5", "--literal"});
+  CHECK(a.flag("--json"));
+  CHECK_FALSE(a.flag("--quick"));
+  CHECK(a.value("--out") == "o.csv");
+  CHECK(a.int_value_or("--rate", 0, 1, 200) == 50);
+  CHECK(a.value_or("--missing", "d") == "d");
+  CHECK_THROWS_AS(a.int_value_or("--rate", 0, 60, 200), UsageError);
+  CHECK_THROWS_AS(a.expect_positionals(3, 3), UsageError);
+  CHECK_NOTHROW(a.expect_positionals(1, 2));
+
+  CHECK_THROWS_AS(Args("x", {"--nope"}, {}, {}), UsageError);
+  CHECK_THROWS_AS(Args("x", {"--rate"}, {"--rate"}, {}), UsageError);
+  CHECK_THROWS_AS(Args("x", {"--rate", "1", "--rate", "2"}, {"--rate"}, {}), UsageError);
+  CHECK_THROWS_AS(Args("x", {"--json=1"}, {}, {"--json"}), UsageError);
+  CHECK_THROWS_WITH(Args("x", {"--rate", "abc"}, {"--rate"}, {}).int_value_or("--rate", 0, 1, 9),
+                    Catch::Contains("'abc'"));
+}
