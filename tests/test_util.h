@@ -29,3 +29,30 @@ struct IsaGuard {
 };
 
 }  // namespace yelan::test
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace yelan::test {
+
+// The shared data folder (../shared/data beside the project, or $YELAN_SHARED_DATA) joined
+// with `relative`. When it is absent (a user's clone) the test is reported SKIPPED: ctest
+// runs each test case in its own process, and exit code 77 is its SKIP_RETURN_CODE.
+inline std::string shared_data_or_skip(const std::string& relative) {
+  std::string root;
+  if (const char* env = std::getenv("YELAN_SHARED_DATA"); env && *env) root = env;
+#ifdef YELAN_SHARED_DATA
+  if (root.empty()) root = YELAN_SHARED_DATA;
+#endif
+  const std::string path = root + "/" + relative;
+  if (root.empty() || !std::filesystem::exists(path)) {
+    std::printf("SKIP: shared test data '%s' is not present\n", path.c_str());
+    std::fflush(stdout);
+    std::exit(77);
+  }
+  return path;
+}
+
+}  // namespace yelan::test
