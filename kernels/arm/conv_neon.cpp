@@ -1,0 +1,22 @@
+// Direct convolution, NEON: a 16-lane vector is 4 q registers, so 6 x 1 tiles use 24 of 32 as accumulators.
+#include <omp.h>
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <utility>
+
+#include "kernels/conv.h"
+
+#define CONV_R 6
+#define CONV_NB 1
+#define CONV_DW_CT 4
+
+namespace yelan::kernels {
+namespace {
+#include "kernels/conv_direct.inl"
+}  // namespace
+
+extern const ConvKernels conv_neon{Isa::neon, conv_fwd, conv_bwd_data, conv_bwd_weights};
+
+}  // namespace yelan::kernels

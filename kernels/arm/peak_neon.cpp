@@ -1,0 +1,16 @@
+// FMA peak probe: 24 chains of 4-lane vectors.
+#include <cstdint>
+
+#include "kernels/peak.h"
+
+#define PEAK_LANES 4
+#define PEAK_CHAINS 24
+
+namespace yelan::kernels {
+namespace {
+#include "kernels/peak_chains.inl"
+}  // namespace
+
+extern const PeakKernels peak_neon{Isa::neon, PEAK_CHAINS * PEAK_LANES * 2, fma_loop};
+
+}  // namespace yelan::kernels

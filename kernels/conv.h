@@ -1,0 +1,64 @@
+// 2D convolution (dilation 1, groups 1) on the blocked NCHW16c layout, forward,
+// backward-data and backward-weights. The same kernels serve transposed convolution:
+// deconv forward is conv backward-data, deconv backward-data is conv forward, and deconv
+// backward-weights is conv backward-weights with x and dy swapped.
+//
+// Layouts (b = 16 everywhere, on every ISA, so a network's activations never change
+// layout when the ISA does):
+//   activations  [N][ceil(C/16)][H][W][16], lanes past C are zero
+//   weights, packed once per weight update by pack_conv_weights():
+//     fwd      [OCB][ICB][KH][KW][16 ic][16 oc]
+//     bwd_data [ICB][OCB][KH][KW][16 oc][16 ic]
+//   weight gradient: the fwd packed layout (unpack_conv_weights() gives OIHW).
+//
+// Algorithm: direct convolution with register blocking. A tile holds R output pixels of
+// one row times NB blocks of 16 output channels in R*NB vector accumulators; every input
+// value is broadcast once per tile and every weight vector loaded once per tile, so a
+// tile does R*NB FMAs per R+NB loads. Border pixels whose taps leave the image run as
+// 1-pixel tiles with only their valid taps, so no input is ever padded or copied.
+// Backward-data with stride s splits dx into s x s phases; each phase is a stride-1
+// convolution over dy with the taps that land on it.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "kernels/cpu.h"
+
+namespace yelan::kernels {
+
+inline constexpr int kBlock = 16;
+inline constexpr int kMaxKernel = 11;  // kh, kw up to this
+
+struct ConvShape {
+  int n = 1, ic = 1, ih = 1, iw = 1;  // input
+  int oc = 1, kh = 1, kw = 1;
+  int stride = 1, pad_h = 0, pad_w = 0;
+  int oh() const { return (ih + 2 * pad_h - kh) / stride + 1; }
+  int ow() const { return (iw + 2 * pad_w - kw) / stride + 1; }
+  int icb() const { return (ic + kBlock - 1) / kBlock; }
+  int ocb() const { return (oc + kBlock - 1) / kBlock; }
+  double flops() const { return 2.0 * n * oh() * ow() * oc * ic * kh * kw; }
+  bool valid() const;  // positive sizes, kernel <= kMaxKernel, pad < kernel, output >= 1x1
+};
+
+struct ConvKernels {
+  Isa isa;
+  // y = conv(x, w) + bias (bias may be null; it has ocb()*16 entries, padding zero)
+  void (*fwd)(const ConvShape& s, const float* x, const float* w_fwd, const float* bias, float* y);
+  // dx = conv_transpose(dy, w); overwrites dx
+  void (*bwd_data)(const ConvShape& s, const float* dy, const float* w_bwd, float* dx);
+  // dw = sum over batch and pixels (fwd packed layout); dbias likewise (may be null).
+  // Overwrites both.
+  void (*bwd_weights)(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias);
+};
+
+const ConvKernels& conv_kernels(Isa isa);
+inline const ConvKernels& conv_kernels() { return conv_kernels(active_isa()); }
+extern const ConvKernels conv_scalar;  // plain loops: the reference for every variant
+
+enum class ConvPack { fwd, bwd_data };
+std::size_t conv_weight_floats(const ConvShape& s);  // either packed layout
+void pack_conv_weights(const ConvShape& s, const float* w_oihw, ConvPack pack, float* out);
+void unpack_conv_weights(const ConvShape& s, const float* w_fwd, float* w_oihw);
+
+}  // namespace yelan::kernels

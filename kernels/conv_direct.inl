@@ -1,0 +1,290 @@
+// The register-blocked direct convolution of kernels/conv.h, written once with GCC vector
+// extensions and compiled per ISA: each variant file defines CONV_R (pixels per tile),
+// CONV_NB (16-channel output blocks per tile) and CONV_DW_CT (input lanes per
+// backward-weights pass) to fit its register file, then includes this inside an anonymous
+// namespace. A 64-byte vector becomes one zmm, two ymm or four NEON q registers.
+//
+// Needs: <algorithm>, <cstddef>, <omp.h>, kernels/conv.h; -ffp-contract=fast so that
+// `acc += x * w` is one FMA.
+
+typedef float v16 __attribute__((vector_size(64)));
+// Memory accesses go through an under-aligned alias: callers' buffers need only float
+// alignment (unaligned loads cost nothing extra on aligned data).
+typedef float v16u __attribute__((vector_size(64), aligned(4)));
+
+inline v16 load16(const float* p) { return *reinterpret_cast<const v16u*>(p); }
+inline void store16(float* p, v16 v) { *reinterpret_cast<v16u*>(p) = v; }
+
+struct Tap {
+  std::ptrdiff_t src, w;  // offsets in floats from the tile's source and weight bases
+};
+
+struct TileArgs {
+  const float* src;              // source pixel of tile column 0, channel block 0
+  std::ptrdiff_t src_r, src_cb;  // step to the next tile column / next source channel block
+  const float* w;                // weights of output block 0, source block 0
+  std::ptrdiff_t w_cb, w_ob;     // step to the next source block / next output block
+  const Tap* taps;
+  int ntaps, ncb;
+  float* dst;                    // destination pixel of tile column 0, output block 0
+  std::ptrdiff_t dst_r, dst_ob;
+  const float* bias;             // null, or 16 per output block
+};
+
+template <int R, int NB>
+void tile(const TileArgs& a) {
+  v16 acc[R][NB];
+#pragma GCC unroll 8
+  for (int j = 0; j < NB; ++j) {
+    const v16 b = a.bias ? load16(a.bias + j * kBlock) : v16{};
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r) acc[r][j] = b;
+  }
+  for (int cb = 0; cb < a.ncb; ++cb) {
+    const float* s = a.src + cb * a.src_cb;
+    const float* w = a.w + cb * a.w_cb;
+    for (int t = 0; t < a.ntaps; ++t) {
+      const float* st = s + a.taps[t].src;
+      const float* wt = w + a.taps[t].w;
+#pragma GCC unroll 16
+      for (int c = 0; c < kBlock; ++c) {
+        v16 wv[NB];
+#pragma GCC unroll 8
+        for (int j = 0; j < NB; ++j) wv[j] = load16(wt + j * a.w_ob + c * kBlock);
+#pragma GCC unroll 16
+        for (int r = 0; r < R; ++r) {
+          const float xv = st[r * a.src_r + c];
+#pragma GCC unroll 8
+          for (int j = 0; j < NB; ++j) acc[r][j] += xv * wv[j];
+        }
+      }
+    }
+  }
+#pragma GCC unroll 16
+  for (int r = 0; r < R; ++r)
+#pragma GCC unroll 8
+    for (int j = 0; j < NB; ++j) store16(a.dst + r * a.dst_r + j * a.dst_ob, acc[r][j]);
+}
+
+using TileFn = void (*)(const TileArgs&);
+
+template <int NB, int... R>
+constexpr auto tiles_for(std::integer_sequence<int, R...>) {
+  return std::array<TileFn, sizeof...(R)>{&tile<R + 1, NB>...};
+}
+template <int... NB>
+constexpr auto tile_table(std::integer_sequence<int, NB...>) {
+  return std::array<std::array<TileFn, CONV_R>, sizeof...(NB)>{
+      tiles_for<NB + 1>(std::make_integer_sequence<int, CONV_R>{})...};
+}
+// kTiles[nb - 1][r - 1] is tile<r, nb>.
+constexpr auto kTiles = tile_table(std::make_integer_sequence<int, CONV_NB>{});
+
+inline int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+inline int ceil_div(int a, int b) { return -floor_div(-a, b); }
+
+constexpr int kMaxTaps = kMaxKernel * kMaxKernel;
+
+// One destination row of T columns. Destination column t reads source column
+// base[k] + t * mult for column tap k (mult = stride for forward, 1 for a backward-data
+// phase). Columns where every tap stays inside the source go in R-wide tiles sharing one
+// tap list; the border columns go one by one with only their valid taps, so the source is
+// never padded or copied.
+struct RowJob {
+  int T = 0, src_w = 0, mult = 1;
+  int nrow = 0, ncol = 0;
+  std::ptrdiff_t row_src[kMaxKernel], row_w[kMaxKernel];  // per row tap
+  int col_base[kMaxKernel];                               // per column tap
+  std::ptrdiff_t col_w[kMaxKernel];
+};
+
+inline void run_row(const RowJob& job, TileArgs a, int nb) {
+  Tap taps[kMaxTaps];
+  int t_lo = 0, t_hi = job.T;
+  for (int k = 0; k < job.ncol; ++k) {
+    t_lo = std::max(t_lo, ceil_div(-job.col_base[k], job.mult));
+    t_hi = std::min(t_hi, floor_div(job.src_w - 1 - job.col_base[k], job.mult) + 1);
+  }
+  t_lo = std::min(t_lo, job.T);
+  t_hi = std::max(t_hi, t_lo);
+  int nt = 0;
+  for (int i = 0; i < job.nrow; ++i)
+    for (int k = 0; k < job.ncol; ++k)
+      taps[nt++] = {job.row_src[i] + std::ptrdiff_t(job.col_base[k]) * kBlock, job.row_w[i] + job.col_w[k]};
+  const float* src0 = a.src;
+  float* dst0 = a.dst;
+  a.src_r = std::ptrdiff_t(job.mult) * kBlock;
+  a.taps = taps;
+  a.ntaps = nt;
+  for (int t = t_lo; t < t_hi; t += CONV_R) {
+    const int r = std::min(CONV_R, t_hi - t);
+    a.src = src0 + t * a.src_r;
+    a.dst = dst0 + t * a.dst_r;
+    kTiles[nb - 1][r - 1](a);
+  }
+  for (int t = 0; t < job.T; ++t) {
+    if (t >= t_lo && t < t_hi) continue;
+    int ne = 0;
+    for (int i = 0; i < job.nrow; ++i)
+      for (int k = 0; k < job.ncol; ++k) {
+        const int c = job.col_base[k] + t * job.mult;
+        if (c < 0 || c >= job.src_w) continue;
+        taps[ne++] = {job.row_src[i] + std::ptrdiff_t(job.col_base[k]) * kBlock, job.row_w[i] + job.col_w[k]};
+      }
+    a.taps = taps;
+    a.ntaps = ne;
+    a.src = src0 + t * a.src_r;
+    a.dst = dst0 + t * a.dst_r;
+    kTiles[nb - 1][0](a);
+  }
+}
+
+void conv_fwd(const ConvShape& s, const float* x, const float* w, const float* bias, float* y) {
+  const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb();
+  const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
+  const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
+  const std::ptrdiff_t w_tap = kBlock * kBlock, w_cb = std::ptrdiff_t(s.kh) * s.kw * w_tap;
+  const std::ptrdiff_t w_ob = ICB * w_cb;
+  const int groups = (OCB + CONV_NB - 1) / CONV_NB;
+#pragma omp parallel for collapse(3) schedule(static)
+  for (int n = 0; n < s.n; ++n)
+    for (int g = 0; g < groups; ++g)
+      for (int oh = 0; oh < OH; ++oh) {
+        const int ob0 = g * CONV_NB, nb = std::min(CONV_NB, OCB - ob0);
+        RowJob job;
+        job.T = OW;
+        job.src_w = s.iw;
+        job.mult = s.stride;
+        for (int kh = 0; kh < s.kh; ++kh) {
+          const int ih = oh * s.stride - s.pad_h + kh;
+          if (ih < 0 || ih >= s.ih) continue;
+          job.row_src[job.nrow] = std::ptrdiff_t(ih) * s.iw * kBlock;
+          job.row_w[job.nrow++] = kh * s.kw * w_tap;
+        }
+        job.ncol = s.kw;
+        for (int kw = 0; kw < s.kw; ++kw) {
+          job.col_base[kw] = kw - s.pad_w;
+          job.col_w[kw] = kw * w_tap;
+        }
+        TileArgs a;
+        a.src = x + std::ptrdiff_t(n) * ICB * x_plane;
+        a.src_cb = x_plane;
+        a.w = w + ob0 * w_ob;
+        a.w_cb = w_cb;
+        a.w_ob = w_ob;
+        a.ncb = ICB;
+        a.dst = y + (std::ptrdiff_t(n) * OCB + ob0) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
+        a.dst_r = kBlock;
+        a.dst_ob = y_plane;
+        a.bias = bias ? bias + ob0 * kBlock : nullptr;
+        run_row(job, a, nb);
+      }
+}
+
+// dx[ih][iw] gathers dy[oh][ow] through tap (kh, kw) when ih = oh*s - pad_h + kh, likewise
+// for columns. For a fixed destination row and column phase (iw % s) the valid taps are
+// fixed and ow steps by 1 as iw steps by s: a stride-1 tile over dy writing every s-th dx.
+void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, float* dx) {
+  const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb(), st = s.stride;
+  const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
+  const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
+  const std::ptrdiff_t w_tap = kBlock * kBlock, w_cb = std::ptrdiff_t(s.kh) * s.kw * w_tap;
+  const std::ptrdiff_t w_ob = OCB * w_cb;  // bwd layout: [ICB][OCB][KH][KW][16 oc][16 ic]
+  const int groups = (ICB + CONV_NB - 1) / CONV_NB;
+#pragma omp parallel for collapse(3) schedule(static)
+  for (int n = 0; n < s.n; ++n)
+    for (int g = 0; g < groups; ++g)
+      for (int ih = 0; ih < s.ih; ++ih) {
+        const int cb0 = g * CONV_NB, nb = std::min(CONV_NB, ICB - cb0);
+        RowJob base;
+        base.src_w = OW;
+        base.mult = 1;
+        for (int kh = 0; kh < s.kh; ++kh) {
+          const int num = ih + s.pad_h - kh;
+          if (num < 0 || num % st != 0 || num / st >= OH) continue;
+          base.row_src[base.nrow] = std::ptrdiff_t(num / st) * OW * kBlock;
+          base.row_w[base.nrow++] = kh * s.kw * w_tap;
+        }
+        TileArgs a;
+        a.src_cb = y_plane;
+        a.w = w + cb0 * w_ob;
+        a.w_cb = w_cb;
+        a.w_ob = w_ob;
+        a.ncb = OCB;
+        a.dst_r = std::ptrdiff_t(st) * kBlock;
+        a.dst_ob = x_plane;
+        a.bias = nullptr;
+        for (int phase = 0; phase < st && phase < s.iw; ++phase) {
+          RowJob job = base;
+          job.T = (s.iw - phase + st - 1) / st;
+          for (int kw = 0; kw < s.kw; ++kw) {
+            const int num = phase + s.pad_w - kw;  // ow = num / st + t when num % st == 0
+            if (((num % st) + st) % st != 0) continue;
+            job.col_base[job.ncol] = floor_div(num, st);
+            job.col_w[job.ncol++] = kw * w_tap;
+          }
+          if (job.nrow == 0) job.ncol = 0;
+          a.src = dy + std::ptrdiff_t(n) * OCB * y_plane;
+          a.dst = dx + (std::ptrdiff_t(n) * ICB + cb0) * x_plane + (std::ptrdiff_t(ih) * s.iw + phase) * kBlock;
+          run_row(job, a, nb);
+        }
+      }
+}
+
+// dw[ob][cb][kh][kw][ci][:] = sum over n, oh, ow of x[n][cb][ih][iw][ci] * dy[n][ob][oh][ow][:]
+// with CONV_DW_CT input lanes in accumulators at a time. One task per (ob, cb, kh, kw):
+// tasks never share output, so no reduction between threads.
+template <int CT>
+void dw_pass(const ConvShape& s, const float* x, const float* dy, int ob, int cb, int kh, int kw,
+             int c0, float* out) {
+  const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb(), st = s.stride;
+  const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
+  const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
+  v16 acc[CT];
+#pragma GCC unroll 16
+  for (int c = 0; c < CT; ++c) acc[c] = v16{};
+  const int ow_lo = std::max(0, ceil_div(s.pad_w - kw, st));
+  const int ow_hi = std::min(OW, floor_div(s.iw - 1 + s.pad_w - kw, st) + 1);
+  for (int n = 0; n < s.n; ++n)
+    for (int oh = 0; oh < OH; ++oh) {
+      const int ih = oh * st - s.pad_h + kh;
+      if (ih < 0 || ih >= s.ih) continue;
+      const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
+      const float* xr = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane + std::ptrdiff_t(ih) * s.iw * kBlock + c0;
+      for (int ow = ow_lo; ow < ow_hi; ++ow) {
+        const v16 d = load16(g + std::ptrdiff_t(ow) * kBlock);
+        const float* xp = xr + std::ptrdiff_t(ow * st - s.pad_w + kw) * kBlock;
+#pragma GCC unroll 16
+        for (int c = 0; c < CT; ++c) acc[c] += xp[c] * d;
+      }
+    }
+#pragma GCC unroll 16
+  for (int c = 0; c < CT; ++c) store16(out + (c0 + c) * kBlock, acc[c]);
+}
+
+void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias) {
+  const int ICB = s.icb(), OCB = s.ocb(), K = s.kh * s.kw;
+  const std::ptrdiff_t y_plane = std::ptrdiff_t(s.oh()) * s.ow() * kBlock;
+#pragma omp parallel
+  {
+#pragma omp for collapse(3) schedule(dynamic)
+    for (int ob = 0; ob < OCB; ++ob)
+      for (int cb = 0; cb < ICB; ++cb)
+        for (int k = 0; k < K; ++k) {
+          float* out = dw + ((std::ptrdiff_t(ob) * ICB + cb) * K + k) * kBlock * kBlock;
+          for (int c0 = 0; c0 < kBlock; c0 += CONV_DW_CT)
+            dw_pass<CONV_DW_CT>(s, x, dy, ob, cb, k / s.kw, k % s.kw, c0, out);
+        }
+    if (dbias) {
+#pragma omp for schedule(static)
+      for (int ob = 0; ob < OCB; ++ob) {
+        v16 acc{};
+        for (int n = 0; n < s.n; ++n) {
+          const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
+          for (std::ptrdiff_t p = 0; p < y_plane; p += kBlock) acc += load16(g + p);
+        }
+        store16(dbias + ob * kBlock, acc);
+      }
+    }
+  }
+}

@@ -1,0 +1,185 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "conv_reference.h"
+#include "kernels/conv.h"
+#include "test_util.h"
+
+using namespace yelan::kernels;
+using yelan::test::conv_reference;
+using yelan::test::from_blocked;
+using yelan::test::padding_is_zero;
+using yelan::test::random_floats;
+using yelan::test::to_blocked;
+
+namespace {
+
+struct Case {
+  int n, ic, ih, iw, oc, k, stride, pad;
+};
+
+ConvShape shape_of(const Case& c) {
+  ConvShape s;
+  s.n = c.n; s.ic = c.ic; s.ih = c.ih; s.iw = c.iw; s.oc = c.oc;
+  s.kh = s.kw = c.k; s.stride = c.stride; s.pad_h = s.pad_w = c.pad;
+  return s;
+}
+
+// Every kernel/stride/padding the networks use, on odd channel counts and sizes.
+const Case kCases[] = {
+    {1, 1, 1, 1, 1, 1, 1, 0},     {1, 3, 7, 5, 13, 3, 1, 1},    {2, 17, 7, 5, 3, 3, 2, 1},
+    {1, 13, 33, 44, 17, 3, 1, 1}, {1, 17, 33, 44, 13, 3, 2, 1}, {1, 6, 33, 44, 64, 7, 2, 3},
+    {1, 1, 17, 23, 17, 7, 2, 3},  {1, 64, 7, 5, 64, 1, 1, 0},   {1, 33, 9, 7, 31, 1, 2, 0},
+    {1, 64, 33, 44, 64, 3, 1, 1}, {1, 3, 1, 1, 5, 3, 1, 1},     {1, 5, 3, 3, 7, 3, 2, 1},
+    {2, 20, 12, 11, 40, 3, 2, 1}, {1, 64, 65, 87, 64, 3, 1, 1},
+};
+
+struct Run {
+  std::vector<float> y, dx, dw, db;
+};
+
+Run run_kernels(const ConvKernels& k, const ConvShape& s, const std::vector<float>& x,
+                const std::vector<float>& w, const std::vector<float>& b, const std::vector<float>& dy) {
+  std::vector<float> wf(conv_weight_floats(s)), wb(conv_weight_floats(s));
+  pack_conv_weights(s, w.data(), ConvPack::fwd, wf.data());
+  pack_conv_weights(s, w.data(), ConvPack::bwd_data, wb.data());
+  std::vector<float> bias(std::size_t(s.ocb()) * kBlock, 0.f);
+  std::copy(b.begin(), b.end(), bias.begin());
+  const auto xb = to_blocked(x, s.n, s.ic, s.ih, s.iw);
+  const auto dyb = to_blocked(dy, s.n, s.oc, s.oh(), s.ow());
+  std::vector<float> yb(dyb.size(), -7.f), dxb(xb.size(), -7.f), dwp(wf.size(), -7.f), db(bias.size(), -7.f);
+  k.fwd(s, xb.data(), wf.data(), bias.data(), yb.data());
+  k.bwd_data(s, dyb.data(), wb.data(), dxb.data());
+  k.bwd_weights(s, xb.data(), dyb.data(), dwp.data(), db.data());
+  REQUIRE(padding_is_zero(yb, s.n, s.oc, s.oh(), s.ow()));
+  REQUIRE(padding_is_zero(dxb, s.n, s.ic, s.ih, s.iw));
+  Run r;
+  r.y = from_blocked(yb, s.n, s.oc, s.oh(), s.ow());
+  r.dx = from_blocked(dxb, s.n, s.ic, s.ih, s.iw);
+  r.dw.resize(w.size());
+  unpack_conv_weights(s, dwp.data(), r.dw.data());
+  r.db.assign(db.begin(), db.begin() + s.oc);
+  for (int o = s.oc; o < s.ocb() * kBlock; ++o) REQUIRE(db[o] == 0.f);
+  return r;
+}
+
+// |got - want| <= tol * scale, where scale bounds the magnitude of the summed terms.
+void check_close(const char* what, const std::vector<float>& got, const std::vector<double>& want,
+                 const std::vector<double>& scale, double tol) {
+  REQUIRE(got.size() == want.size());
+  double worst = 0;
+  std::size_t worst_i = 0;
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    const double err = std::abs(got[i] - want[i]) / (scale[i] + 1e-30);
+    if (err > worst) { worst = err; worst_i = i; }
+  }
+  INFO(what << ": worst relative error " << worst << " at " << worst_i << " (got " << got[worst_i]
+            << ", want " << want[worst_i] << ")");
+  CHECK(worst <= tol);
+}
+
+// Magnitude scales for the backward results: the same sums with |terms|.
+std::vector<double> abs_scale(const std::vector<double>& v, double floor_value) {
+  std::vector<double> s(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) s[i] = std::abs(v[i]) + floor_value;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("conv forward and backward match a double-precision reference on every ISA", "[kernels][conv]") {
+  for (const Case& c : kCases) {
+    const ConvShape s = shape_of(c);
+    REQUIRE(s.valid());
+    const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 11);
+    const auto w = random_floats(std::size_t(s.oc) * s.ic * s.kh * s.kw, 12);
+    const auto b = random_floats(s.oc, 13);
+    const auto dy = random_floats(std::size_t(s.n) * s.oc * s.oh() * s.ow(), 14);
+    const auto ref = conv_reference(s, x, w, b, dy);
+    // Backward scales: the size of a typical term times the number of terms summed.
+    const double terms_dx = double(s.oc) * s.kh * s.kw / (s.stride * s.stride) + 1;
+    const double terms_dw = double(s.n) * s.oh() * s.ow() + 1;
+    const auto dx_scale = abs_scale(ref.dx, 0.25 * std::sqrt(terms_dx));
+    const auto dw_scale = abs_scale(ref.dw, 0.25 * std::sqrt(terms_dw));
+    const auto db_scale = abs_scale(ref.db, 0.5 * std::sqrt(terms_dw));
+    for (Isa isa : yelan::test::supported_isas()) {
+      INFO("isa " << isa_name(isa) << " shape n" << c.n << " ic" << c.ic << " " << c.ih << "x" << c.iw
+                  << " oc" << c.oc << " k" << c.k << " s" << c.stride << " p" << c.pad);
+      const Run r = run_kernels(conv_kernels(isa), s, x, w, b, dy);
+      check_close("y", r.y, ref.y, ref.y_abs, 1e-5);
+      check_close("dx", r.dx, ref.dx, dx_scale, 1e-5);
+      check_close("dw", r.dw, ref.dw, dw_scale, 1e-5);
+      check_close("db", r.db, ref.db, db_scale, 1e-5);
+    }
+  }
+}
+
+TEST_CASE("conv backward passes are the adjoints of forward (finite differences, double)", "[kernels][conv]") {
+  // L(x, w) = <dy, conv(x, w)>: dL/dx = bwd_data(dy), dL/dw = bwd_weights(x, dy). L is
+  // linear in each, so a central difference in double is exact up to rounding.
+  for (const Case& c : {Case{1, 3, 7, 5, 5, 3, 2, 1}, Case{1, 17, 6, 7, 3, 7, 2, 3}, Case{2, 4, 5, 5, 6, 1, 2, 0}}) {
+    const ConvShape s = shape_of(c);
+    const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 21);
+    const auto w = random_floats(std::size_t(s.oc) * s.ic * s.kh * s.kw, 22);
+    const auto dy = random_floats(std::size_t(s.n) * s.oc * s.oh() * s.ow(), 23);
+    auto loss = [&](const std::vector<float>& xx, const std::vector<float>& ww, std::size_t xi, double dxv,
+                    std::size_t wi, double dwv) {
+      // <dy, conv> in double with one perturbed input or weight.
+      double L = 0;
+      for (int n = 0; n < s.n; ++n)
+        for (int o = 0; o < s.oc; ++o)
+          for (int oh = 0; oh < s.oh(); ++oh)
+            for (int ow = 0; ow < s.ow(); ++ow) {
+              double acc = 0;
+              for (int i = 0; i < s.ic; ++i)
+                for (int kh = 0; kh < s.kh; ++kh)
+                  for (int kw = 0; kw < s.kw; ++kw) {
+                    const int ih = oh * s.stride - s.pad_h + kh, iw = ow * s.stride - s.pad_w + kw;
+                    if (ih < 0 || ih >= s.ih || iw < 0 || iw >= s.iw) continue;
+                    const std::size_t a = ((std::size_t(n) * s.ic + i) * s.ih + ih) * s.iw + iw;
+                    const std::size_t bi = ((std::size_t(o) * s.ic + i) * s.kh + kh) * s.kw + kw;
+                    acc += (xx[a] + (a == xi ? dxv : 0.0)) * (ww[bi] + (bi == wi ? dwv : 0.0));
+                  }
+              L += acc * dy[((std::size_t(n) * s.oc + o) * s.oh() + oh) * s.ow() + ow];
+            }
+      return L;
+    };
+    const double h = 1e-3;
+    for (Isa isa : yelan::test::supported_isas()) {
+      const Run r = run_kernels(conv_kernels(isa), s, x, w, {}, dy);
+      for (std::size_t xi = 0; xi < x.size(); xi += 7) {
+        const double fd = (loss(x, w, xi, h, SIZE_MAX, 0) - loss(x, w, xi, -h, SIZE_MAX, 0)) / (2 * h);
+        INFO("isa " << isa_name(isa) << " dx[" << xi << "]");
+        REQUIRE(std::abs(r.dx[xi] - fd) <= 1e-4 * (1 + std::abs(fd)));
+      }
+      for (std::size_t wi = 0; wi < w.size(); wi += 5) {
+        const double fd = (loss(x, w, SIZE_MAX, 0, wi, h) - loss(x, w, SIZE_MAX, 0, wi, -h)) / (2 * h);
+        INFO("isa " << isa_name(isa) << " dw[" << wi << "]");
+        REQUIRE(std::abs(r.dw[wi] - fd) <= 1e-4 * (1 + std::abs(fd)));
+      }
+    }
+  }
+}
+
+TEST_CASE("conv ISA variants agree with each other up to rounding", "[kernels][conv]") {
+  const ConvShape s = shape_of({1, 20, 13, 17, 36, 3, 1, 1});
+  const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 31);
+  const auto w = random_floats(std::size_t(s.oc) * s.ic * s.kh * s.kw, 32);
+  const auto dy = random_floats(std::size_t(s.n) * s.oc * s.oh() * s.ow(), 33);
+  const Run base = run_kernels(conv_scalar, s, x, w, {}, dy);
+  for (Isa isa : yelan::test::supported_isas()) {
+    const Run r = run_kernels(conv_kernels(isa), s, x, w, {}, dy);
+    for (std::size_t i = 0; i < r.y.size(); ++i) REQUIRE(std::abs(r.y[i] - base.y[i]) <= 2e-5f * (1 + std::abs(base.y[i])));
+    for (std::size_t i = 0; i < r.dx.size(); ++i) REQUIRE(std::abs(r.dx[i] - base.dx[i]) <= 2e-5f * (1 + std::abs(base.dx[i])));
+    for (std::size_t i = 0; i < r.dw.size(); ++i) REQUIRE(std::abs(r.dw[i] - base.dw[i]) <= 1e-4f * (1 + std::abs(base.dw[i])));
+  }
+}
+
+TEST_CASE("conv shapes outside the supported range are reported invalid", "[kernels][conv]") {
+  CHECK_FALSE(shape_of({1, 3, 2, 2, 4, 7, 1, 0}).valid());   // kernel larger than the input
+  CHECK_FALSE(shape_of({1, 3, 8, 8, 4, 3, 1, 3}).valid());   // pad >= kernel
+  CHECK_FALSE(shape_of({0, 3, 8, 8, 4, 3, 1, 1}).valid());
+  CHECK_FALSE(shape_of({1, 3, 20, 20, 4, 13, 1, 1}).valid());  // above kMaxKernel
+  CHECK(shape_of({1, 3, 8, 8, 4, 3, 2, 1}).valid());
+}
