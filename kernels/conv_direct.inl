@@ -1,19 +1,22 @@
 // The register-blocked direct convolution of kernels/conv.h, written once with GCC vector
-// extensions and compiled per ISA: each variant file defines CONV_R (pixels per tile),
-// CONV_NB (16-channel output blocks per tile) and CONV_DW_CT (input lanes per
-// backward-weights pass) to fit its register file, then includes this inside an anonymous
-// namespace. A 64-byte vector becomes one zmm, two ymm or four NEON q registers.
+// extensions and compiled per ISA: each variant file defines CONV_VL (floats per native
+// vector: 16 AVX-512, 8 AVX2, 4 NEON), CONV_R (pixels per tile), CONV_NB (16-channel
+// output blocks per tile) and CONV_DW_CT (input lanes per backward-weights pass) to fit
+// its register file, then includes this inside an anonymous namespace. A 16-channel block
+// is CONV_NV = 16 / CONV_VL native vectors, so the compiler never sees a vector wider
+// than the hardware's.
 //
-// Needs: <algorithm>, <cstddef>, <omp.h>, kernels/conv.h; -ffp-contract=fast so that
-// `acc += x * w` is one FMA.
+// Needs: <algorithm>, <array>, <cstddef>, <utility>, kernels/conv.h; -ffp-contract=fast
+// so that `acc += x * w` is one FMA.
 
-typedef float v16 __attribute__((vector_size(64)));
+constexpr int CONV_NV = kBlock / CONV_VL;
+typedef float vn __attribute__((vector_size(CONV_VL * 4)));
 // Memory accesses go through an under-aligned alias: callers' buffers need only float
 // alignment (unaligned loads cost nothing extra on aligned data).
-typedef float v16u __attribute__((vector_size(64), aligned(4)));
+typedef float vnu __attribute__((vector_size(CONV_VL * 4), aligned(4)));
 
-inline v16 load16(const float* p) { return *reinterpret_cast<const v16u*>(p); }
-inline void store16(float* p, v16 v) { *reinterpret_cast<v16u*>(p) = v; }
+inline vn loadv(const float* p) { return *reinterpret_cast<const vnu*>(p); }
+inline void storev(float* p, vn v) { *reinterpret_cast<vnu*>(p) = v; }
 
 struct Tap {
   std::ptrdiff_t src, w;  // offsets in floats from the tile's source and weight bases
@@ -33,12 +36,13 @@ struct TileArgs {
 
 template <int R, int NB>
 void tile(const TileArgs& a) {
-  v16 acc[R][NB];
-#pragma GCC unroll 8
-  for (int j = 0; j < NB; ++j) {
-    const v16 b = a.bias ? load16(a.bias + j * kBlock) : v16{};
+  constexpr int NQ = NB * CONV_NV;  // native vectors across the tile's output channels
+  vn acc[R][NQ];
 #pragma GCC unroll 16
-    for (int r = 0; r < R; ++r) acc[r][j] = b;
+  for (int q = 0; q < NQ; ++q) {
+    const vn b = a.bias ? loadv(a.bias + (q / CONV_NV) * kBlock + (q % CONV_NV) * CONV_VL) : vn{};
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r) acc[r][q] = b;
   }
   for (int cb = 0; cb < a.ncb; ++cb) {
     const float* s = a.src + cb * a.src_cb;
@@ -48,22 +52,24 @@ void tile(const TileArgs& a) {
       const float* wt = w + a.taps[t].w;
 #pragma GCC unroll 16
       for (int c = 0; c < kBlock; ++c) {
-        v16 wv[NB];
-#pragma GCC unroll 8
-        for (int j = 0; j < NB; ++j) wv[j] = load16(wt + j * a.w_ob + c * kBlock);
+        vn wv[NQ];
+#pragma GCC unroll 16
+        for (int q = 0; q < NQ; ++q)
+          wv[q] = loadv(wt + (q / CONV_NV) * a.w_ob + c * kBlock + (q % CONV_NV) * CONV_VL);
 #pragma GCC unroll 16
         for (int r = 0; r < R; ++r) {
           const float xv = st[r * a.src_r + c];
-#pragma GCC unroll 8
-          for (int j = 0; j < NB; ++j) acc[r][j] += xv * wv[j];
+#pragma GCC unroll 16
+          for (int q = 0; q < NQ; ++q) acc[r][q] += xv * wv[q];
         }
       }
     }
   }
 #pragma GCC unroll 16
   for (int r = 0; r < R; ++r)
-#pragma GCC unroll 8
-    for (int j = 0; j < NB; ++j) store16(a.dst + r * a.dst_r + j * a.dst_ob, acc[r][j]);
+#pragma GCC unroll 16
+    for (int q = 0; q < NQ; ++q)
+      storev(a.dst + r * a.dst_r + (q / CONV_NV) * a.dst_ob + (q % CONV_NV) * CONV_VL, acc[r][q]);
 }
 
 using TileFn = void (*)(const TileArgs&);
@@ -240,9 +246,11 @@ void dw_pass(const ConvShape& s, const float* x, const float* dy, int ob, int cb
   const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb(), st = s.stride;
   const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
   const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
-  v16 acc[CT];
+  vn acc[CT][CONV_NV];
 #pragma GCC unroll 16
-  for (int c = 0; c < CT; ++c) acc[c] = v16{};
+  for (int c = 0; c < CT; ++c)
+#pragma GCC unroll 4
+    for (int q = 0; q < CONV_NV; ++q) acc[c][q] = vn{};
   const int ow_lo = std::max(0, ceil_div(s.pad_w - kw, st));
   const int ow_hi = std::min(OW, floor_div(s.iw - 1 + s.pad_w - kw, st) + 1);
   for (int n = 0; n < s.n; ++n)
@@ -252,14 +260,20 @@ void dw_pass(const ConvShape& s, const float* x, const float* dy, int ob, int cb
       const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
       const float* xr = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane + std::ptrdiff_t(ih) * s.iw * kBlock + c0;
       for (int ow = ow_lo; ow < ow_hi; ++ow) {
-        const v16 d = load16(g + std::ptrdiff_t(ow) * kBlock);
+        vn d[CONV_NV];
+#pragma GCC unroll 4
+        for (int q = 0; q < CONV_NV; ++q) d[q] = loadv(g + std::ptrdiff_t(ow) * kBlock + q * CONV_VL);
         const float* xp = xr + std::ptrdiff_t(ow * st - s.pad_w + kw) * kBlock;
 #pragma GCC unroll 16
-        for (int c = 0; c < CT; ++c) acc[c] += xp[c] * d;
+        for (int c = 0; c < CT; ++c)
+#pragma GCC unroll 4
+          for (int q = 0; q < CONV_NV; ++q) acc[c][q] += xp[c] * d[q];
       }
     }
 #pragma GCC unroll 16
-  for (int c = 0; c < CT; ++c) store16(out + (c0 + c) * kBlock, acc[c]);
+  for (int c = 0; c < CT; ++c)
+#pragma GCC unroll 4
+    for (int q = 0; q < CONV_NV; ++q) storev(out + (c0 + c) * kBlock + q * CONV_VL, acc[c][q]);
 }
 
 void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias) {
@@ -278,12 +292,13 @@ void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float
     if (dbias) {
 #pragma omp for schedule(static)
       for (int ob = 0; ob < OCB; ++ob) {
-        v16 acc{};
+        vn acc[CONV_NV] = {};
         for (int n = 0; n < s.n; ++n) {
           const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
-          for (std::ptrdiff_t p = 0; p < y_plane; p += kBlock) acc += load16(g + p);
+          for (std::ptrdiff_t p = 0; p < y_plane; p += kBlock)
+            for (int q = 0; q < CONV_NV; ++q) acc[q] += loadv(g + p + q * CONV_VL);
         }
-        store16(dbias + ob * kBlock, acc);
+        for (int q = 0; q < CONV_NV; ++q) storev(dbias + ob * kBlock + q * CONV_VL, acc[q]);
       }
     }
   }

@@ -8,6 +8,7 @@
 
 #include "kernels/conv.h"
 
+#define CONV_VL 16
 #define CONV_R 6
 #define CONV_NB 4
 #define CONV_DW_CT 16

@@ -1,0 +1,188 @@
+#include "benchmarks/kernels/bench_kernels.h"
+
+#include <omp.h>
+
+#include <cstdio>
+#include <functional>
+#include <iomanip>
+#include <map>
+#include <random>
+#include <sstream>
+
+#include "benchmarks/kernels/chart.h"
+#include "benchmarks/kernels/shapes.h"
+#include "benchmarks/kernels/timing.h"
+#include "engine/aligned.h"
+#include "engine/cli/args.h"
+#include "engine/threads.h"
+#include "kernels/conv.h"
+#include "kernels/peak.h"
+
+namespace yelan::bench {
+namespace {
+
+using kernels::Isa;
+
+struct Record {
+  std::string where, op, algo = "direct";
+  int kh, kw, stride, cin, cout, h, w;
+  std::string isa;
+  int threads;
+  double ms, gflops, peak_gflops, pct_peak;
+};
+
+struct Buffer {
+  AlignedPtr mem;
+  float* p;
+  explicit Buffer(std::size_t n, unsigned seed) : mem(aligned_alloc_bytes(n * sizeof(float))) {
+    p = static_cast<float*>(mem.get());
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-1.f, 1.f);
+    for (std::size_t i = 0; i < n; ++i) p[i] = u(rng);
+  }
+};
+
+double measure_peak_gflops(Isa isa, int threads, int reps) {
+  const kernels::PeakKernels& k = kernels::peak_kernels(isa);
+  const double target_flops = isa == Isa::scalar ? 2e8 : 3e9;  // ~20 ms a call
+  const std::int64_t iters = std::int64_t(target_flops / k.flops_per_iteration);
+  volatile float sink = 0;
+  const double s = median_seconds_per_call(
+      [&] {
+        float local = 0;
+#pragma omp parallel num_threads(threads) reduction(+ : local)
+        local += k.fma_loop(iters, 1.f + omp_get_thread_num());
+        sink = sink + local;
+      },
+      reps, 0.05);
+  return double(threads) * iters * k.flops_per_iteration / s / 1e9;
+}
+
+std::vector<Isa> parse_isas(const std::string& list) {
+  std::vector<Isa> out;
+  std::stringstream ss(list);
+  std::string name;
+  while (std::getline(ss, name, ',')) {
+    auto isa = kernels::parse_isa(name);
+    if (!isa) throw cli::UsageError("--isa-list: unknown ISA '" + name + "'");
+    if (!kernels::isa_supported(*isa)) throw cli::UsageError("--isa-list: " + name + " is not supported on this CPU");
+    out.push_back(*isa);
+  }
+  return out;
+}
+
+std::vector<int> parse_threads(const std::string& list) {
+  std::vector<int> out;
+  std::stringstream ss(list);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    auto n = parse_thread_count(item);
+    if (!n) throw cli::UsageError("--threads-list: '" + item + "' is not a thread count");
+    out.push_back(*n);
+  }
+  return out;
+}
+
+std::string json_escape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    o += c;
+  }
+  return o;
+}
+
+void print_json(std::ostream& out, const std::vector<Record>& recs) {
+  out << "[\n";
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    const Record& r = recs[i];
+    out << std::setprecision(6) << "  {\"op\": \"" << r.op << "\", \"where\": \"" << json_escape(r.where)
+        << "\", \"kh\": " << r.kh << ", \"kw\": " << r.kw << ", \"stride\": " << r.stride
+        << ", \"cin\": " << r.cin << ", \"cout\": " << r.cout << ", \"h\": " << r.h << ", \"w\": " << r.w
+        << ", \"algo\": \"" << r.algo << "\", \"isa\": \"" << r.isa << "\", \"threads\": " << r.threads
+        << ", \"ms\": " << r.ms << ", \"gflops\": " << r.gflops << ", \"peak_gflops\": " << r.peak_gflops
+        << ", \"pct_peak\": " << r.pct_peak << "}" << (i + 1 < recs.size() ? "," : "") << "\n";
+  }
+  out << "]\n";
+}
+
+}  // namespace
+
+int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  cli::Args args("bench kernels", argv, {"--isa-list", "--threads-list", "--reps", "--chart", "--only"},
+                 {"--quick", "--json"});
+  args.expect_positionals(0, 0);
+  const bool quick = args.flag("--quick");
+  const int reps = args.int_value_or("--reps", quick ? 3 : 5, 1, 100);
+  std::vector<Isa> isas;
+  if (auto l = args.value("--isa-list")) isas = parse_isas(*l);
+  else if (quick) isas = {kernels::best_isa()};
+  else
+    for (Isa isa : {Isa::avx2, Isa::avx512, Isa::neon})
+      if (kernels::isa_supported(isa)) isas.push_back(isa);
+  if (isas.empty()) isas = {Isa::scalar};
+  std::vector<int> thread_counts = args.value("--threads-list") ? parse_threads(*args.value("--threads-list"))
+                                   : quick ? std::vector<int>{1} : std::vector<int>{1, 2};
+  const std::string only = args.value_or("--only", "");
+
+  std::vector<Record> recs;
+  const int saved_threads = threads();
+  const Isa saved_isa = kernels::active_isa();
+  for (Isa isa : isas) {
+    for (int t : thread_counts) {
+      set_threads(t);
+      const double peak = measure_peak_gflops(isa, t, reps);
+      err << "peak " << kernels::isa_name(isa) << " x" << t << " thread(s): " << std::fixed
+          << std::setprecision(1) << peak << " GFLOP/s\n";
+      const kernels::ConvKernels& k = kernels::conv_kernels(isa);
+      for (const ConvCase& c : network_conv_cases()) {
+        if (quick && !(c.k == 3 && c.stride == 1)) continue;
+        if (!only.empty() && c.where.find(only) == std::string::npos) continue;
+        kernels::ConvShape s;
+        s.n = 1; s.ic = c.cin; s.ih = c.h; s.iw = c.w; s.oc = c.cout;
+        s.kh = s.kw = c.k; s.stride = c.stride; s.pad_h = s.pad_w = c.pad;
+        const std::size_t xn = std::size_t(s.icb()) * s.ih * s.iw * 16;
+        const std::size_t yn = std::size_t(s.ocb()) * s.oh() * s.ow() * 16;
+        Buffer x(xn, 1), y(yn, 2), w(kernels::conv_weight_floats(s), 3), bias(s.ocb() * 16, 4);
+        struct Op {
+          const char* op;
+          std::function<void()> fn;
+        };
+        const Op ops[] = {
+            {"conv2d.fwd", [&] { k.fwd(s, x.p, w.p, bias.p, y.p); }},
+            {"conv2d.bwd_data", [&] { k.bwd_data(s, y.p, w.p, x.p); }},
+            {"conv2d.bwd_weights", [&] { k.bwd_weights(s, x.p, y.p, w.p, bias.p); }},
+        };
+        for (const auto& op : ops) {
+          const double sec = median_seconds_per_call(op.fn, reps, quick ? 0.02 : 0.05);
+          Record r{c.where, op.op, "direct", c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,
+                   kernels::isa_name(isa), t, sec * 1e3, s.flops() / sec / 1e9, peak, 0};
+          r.pct_peak = 100.0 * r.gflops / peak;
+          recs.push_back(r);
+          if (!args.flag("--json")) {
+            char line[200];
+            std::snprintf(line, sizeof line, "%-22s %-19s %dx%d/%d %4d->%-4d %3dx%-3d %-6s %d  %9.3f ms %7.1f GFLOP/s %5.1f%%\n",
+                          c.where.c_str(), op.op, c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,
+                          kernels::isa_name(isa), t, r.ms, r.gflops, r.pct_peak);
+            out << line << std::flush;
+          }
+        }
+      }
+    }
+  }
+  set_threads(saved_threads);
+  kernels::set_isa(saved_isa);
+  if (args.flag("--json")) print_json(out, recs);
+  if (auto chart = args.value("--chart")) {
+    std::vector<Bar> bars;
+    for (const Record& r : recs)
+      if (r.threads == thread_counts.front() && r.isa == kernels::isa_name(isas.back()))
+        bars.push_back({r.where + " " + r.op.substr(7), r.pct_peak});
+    write_bar_chart_svg(*chart, "% of measured FMA peak, " + std::string(kernels::isa_name(isas.back())) + ", " +
+                                    std::to_string(thread_counts.front()) + " thread(s)", bars, 100.0);
+    err << "chart written to " << *chart << "\n";
+  }
+  return 0;
+}
+
+}  // namespace yelan::bench
