@@ -1,0 +1,148 @@
+#include "benchmarks/events/bench_events.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+#include "camera/event.h"
+#include "camera/repr/tore.h"
+#include "engine/cli/args.h"
+#include "kernels/cpu.h"
+
+namespace yelan::bench {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using camera::Event;
+
+struct Record {
+  std::string name, unit;
+  double value;          // in `unit`
+  double seconds;        // median time of one repetition of the measured work
+  double baseline_s;     // median time of the memcpy/memset of the same bytes
+  std::string baseline;  // what the baseline was
+  std::size_t bytes;     // bytes the baseline moved
+};
+
+template <class F>
+double median_seconds(int reps, F&& work) {
+  std::vector<double> t;
+  for (int r = 0; r < reps; ++r) {
+    auto t0 = Clock::now();
+    work();
+    t.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+// Uniformly random pixels and polarities, 1 us apart: the worst case for the FIFO's
+// locality (a real scene hits neighbouring pixels and is faster).
+std::vector<Event> random_stream(std::size_t n, int width, int height, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<Event> ev(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint64_t r = rng();
+    ev[i] = Event{std::int64_t(i), std::uint16_t((r & 0xffffffff) % width),
+                  std::uint16_t(((r >> 32) & 0x7fffffff) % height), std::uint8_t(r >> 63)};
+  }
+  return ev;
+}
+
+// A sweeping vertical bar about 8 px wide: events cluster like a moving edge.
+std::vector<Event> edge_stream(std::size_t n, int width, int height, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<Event> ev(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const int centre = int((i / 2000) % std::size_t(width));
+    const int x = std::clamp(centre + int(rng() % 8) - 4, 0, width - 1);
+    ev[i] = Event{std::int64_t(i), std::uint16_t(x), std::uint16_t(rng() % height), std::uint8_t(rng() & 1)};
+  }
+  return ev;
+}
+
+void print_text(const std::vector<Record>& recs, std::ostream& out) {
+  for (const Record& r : recs)
+    out << std::left << std::setw(26) << r.name << std::right << std::fixed << std::setprecision(3)
+        << std::setw(12) << r.value << " " << std::setw(10) << std::left << r.unit << std::right
+        << "  time " << std::setprecision(4) << r.seconds * 1e3 << " ms, " << r.baseline << " of "
+        << r.bytes << " B " << r.baseline_s * 1e3 << " ms, ratio " << std::setprecision(2)
+        << r.seconds / r.baseline_s << "\n";
+}
+
+void print_json(const std::vector<Record>& recs, std::ostream& out) {
+  out << "[\n";
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    const Record& r = recs[i];
+    out << std::setprecision(9) << "  {\"name\": \"" << r.name << "\", \"unit\": \"" << r.unit
+        << "\", \"value\": " << r.value << ", \"seconds\": " << r.seconds
+        << ", \"baseline\": \"" << r.baseline << "\", \"baseline_bytes\": " << r.bytes
+        << ", \"baseline_seconds\": " << r.baseline_s
+        << ", \"ratio_to_baseline\": " << r.seconds / r.baseline_s << "}"
+        << (i + 1 < recs.size() ? "," : "") << "\n";
+  }
+  out << "]\n";
+}
+
+}  // namespace
+
+int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  cli::Args args("bench events", argv, {"--events", "--reps", "--k", "--width", "--height"},
+                 {"--quick", "--json"});
+  args.expect_positionals(0, 0);
+  const bool quick = args.flag("--quick");
+  const int n = args.int_value_or("--events", quick ? 1'000'000 : 8'000'000, 1000, 200'000'000);
+  const int reps = args.int_value_or("--reps", quick ? 5 : 11, 1, 1000);
+  const int k = args.int_value_or("--k", 3, 1, 64);
+  const int width = args.int_value_or("--width", 346, 1, 8192);
+  const int height = args.int_value_or("--height", 260, 1, 8192);
+
+  std::vector<Record> recs;
+  camera::ToreVolume tore(width, height, {k});
+
+  // Baseline for updates: copying the event bytes once (the least any update must read).
+  for (auto [name, stream] : {std::pair{"tore_update_random", random_stream(n, width, height, 1)},
+                              std::pair{"tore_update_edge", edge_stream(n, width, height, 2)}}) {
+    std::vector<Event> copy(stream.size());
+    const std::size_t bytes = stream.size() * sizeof(Event);
+    const double base = median_seconds(reps, [&] { std::memcpy(copy.data(), stream.data(), bytes); });
+    tore.reset();
+    tore.update(stream);  // warm the FIFO pages
+    const double s = median_seconds(reps, [&] { tore.update(stream); });
+    recs.push_back({name, "Mev/s", n / s / 1e6, s, base, "memcpy", bytes});
+  }
+
+  // Read-out of a volume after a full stream, against memset of the volume's bytes.
+  std::vector<float> volume(tore.volume_size());
+  const std::size_t bytes = volume.size() * sizeof(float);
+  const int per_rep = quick ? 20 : 50;
+  const std::int64_t t_read = n;  // just after the stream's last event
+  const double base =
+      median_seconds(reps, [&] {
+        for (int i = 0; i < per_rep; ++i) std::memset(volume.data(), i, bytes);
+      }) / per_rep;
+  for (bool baldwin : {false, true}) {
+    const double s = median_seconds(reps, [&] {
+                       for (int i = 0; i < per_rep; ++i)
+                         baldwin ? tore.readout_baldwin(t_read + i, volume.data())
+                                 : tore.readout(t_read + i, volume.data());
+                     }) / per_rep;
+    recs.push_back({baldwin ? "tore_readout_baldwin" : "tore_readout", "ms/volume", s * 1e3, s,
+                    base, "memset", bytes});
+  }
+
+  if (args.flag("--json")) {
+    print_json(recs, out);
+  } else {
+    out << "events bench: " << width << "x" << height << ", K=" << k << ", " << n
+        << " events, median of " << reps << ", 1 thread, isa "
+        << kernels::isa_name(kernels::active_isa()) << "\n";
+    print_text(recs, out);
+  }
+  return 0;
+}
+
+}  // namespace yelan::bench
