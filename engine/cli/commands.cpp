@@ -1,5 +1,7 @@
 #include "engine/cli/commands.h"
 
+#include "engine/cli/handlers.h"
+
 namespace yelan::cli {
 
 const std::vector<Command>& commands() {
@@ -24,9 +26,15 @@ const std::vector<Command>& commands() {
        "usage: yelan repr --type tore|count|voxel|surface --at T1,T2,... IN OUT.h5\n",
        nullptr, "representations (issue 5)"},
       {"record", "record a live camera to a file",
-       "usage: yelan record --duration 10s out.aedat4\n", nullptr, "the libusb driver (issue 5)"},
+       "usage: yelan record [--duration 10s] [--camera SERIAL] OUT.aedat4|OUT.txt|OUT.yelan.h5\n"
+       "Records the first attached DAVIS346 (or the one with SERIAL) until --duration has\n"
+       "passed (10s, 500ms, 2m; default: until Ctrl-C). Ctrl-C stops cleanly; the file is\n"
+       "written atomically and keeps every event decoded before an unplug (exit 1 then).\n",
+       cmd_record, "the libusb driver (issue 5)"},
       {"devices", "list attached event cameras",
-       "usage: yelan devices\n", nullptr, "the libusb driver (issue 5)"},
+       "usage: yelan devices\n"
+       "Lists attached DAVIS346/DVXplorer cameras: model, USB bus, address, serial.\n",
+       cmd_devices, "the libusb driver (issue 5)"},
       {"bench", "benchmarks: kernels, events, run, early-exit",
        "usage: yelan bench kernels|events|run|early-exit [--quick] [--json]\n",
        nullptr, "the kernel benchmarks (issue 3)"},

@@ -1,0 +1,14 @@
+// Handlers of the subcommands, one file engine/cli/cmd_<name>.cpp each; commands.cpp
+// lists them. Each takes the arguments after the command name and returns the exit code.
+#pragma once
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace yelan::cli {
+
+// engine/cli/cmd_camera.cpp: live cameras over libusb.
+int cmd_devices(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int cmd_record(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
+}  // namespace yelan::cli

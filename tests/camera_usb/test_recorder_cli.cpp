@@ -1,0 +1,152 @@
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "camera/io/event_writer.h"
+#include "camera/usb/davis_device.h"
+#include "camera/usb/fake_transport.h"
+#include "camera/usb/libusb_transport.h"
+#include "camera/usb/protocol.h"
+#include "camera/usb/recorder.h"
+#include "engine/cli/cli.h"
+#include "usb_test_util.h"
+
+using namespace yelan::camera::usb;
+using yelan::camera::Event;
+using yelan::test::usb::bytes;
+using yelan::test::usb::col;
+using yelan::test::usb::row;
+using yelan::test::usb::ts;
+using yelan::test::usb::wrap;
+
+namespace {
+
+FakeTransport fake_davis346() {
+  FakeTransport t;
+  t.set_config(module::sysinfo, sysinfo::chip_identifier, 4);
+  t.set_config(module::dvs, dvs::size_columns, 346);
+  t.set_config(module::dvs, dvs::size_rows, 260);
+  return t;
+}
+
+struct CollectingWriter : yelan::camera::EventWriter {
+  std::vector<Event> events;
+  int closes = 0;
+  void write(std::span<const Event> e) override { events.insert(events.end(), e.begin(), e.end()); }
+  void close() override { ++closes; }
+};
+
+// No camera is attached to the machines that run this suite unless the user says so.
+bool camera_attached() {
+  const char* v = std::getenv("YELAN_CAMERA_ATTACHED");
+  return v && *v && std::string(v) != "0";
+}
+
+struct CliResult {
+  int code;
+  std::string out, err;
+};
+CliResult cli(std::vector<std::string> argv) {
+  std::ostringstream out, err;
+  int code = yelan::cli::run(argv, out, err);
+  return {code, out.str(), err.str()};
+}
+
+}  // namespace
+
+TEST_CASE("record: every decoded event reaches the writer, which is closed when the stream ends", "[usb]") {
+  FakeTransport t = fake_davis346();
+  DavisDevice d(t, [](auto) {});
+  d.open();
+  d.configure();
+  t.queue_buffer(bytes({ts(10), row(4), col(1, true)}));
+  t.queue_buffer(bytes({wrap(1), col(2, false), row(259), col(345, true)}));
+  t.unplug_after_queue();
+  CollectingWriter w;
+  int polls = 0;
+  RecordResult r = record(d, t, w, [&] { return ++polls < 100; });
+  CHECK(polls < 10);  // ended by the unplug, not by keep_going
+  CHECK(w.closes == 1);
+  REQUIRE(w.events.size() == 3);
+  CHECK(w.events[0] == Event{10, 1, 4, 1});
+  CHECK(w.events[2] == Event{32768, 345, 259, 1});
+  CHECK(r.events == 3);
+  CHECK(r.t_first == 10);
+  CHECK(r.t_last == 32768);
+  CHECK_THAT(r.error, Catch::Contains("disconnected"));
+  CHECK(r.stats.events == 3);
+}
+
+TEST_CASE("record: stopping on request (Ctrl-C) stops the device and finishes the text file", "[usb]") {
+  FakeTransport t = fake_davis346();
+  DavisDevice d(t, [](auto) {});
+  d.open();
+  d.configure();
+  for (int i = 0; i < 10; ++i) t.queue_buffer(bytes({ts(static_cast<std::uint16_t>(100 * i + 1)), row(2), col(static_cast<std::uint16_t>(i), i % 2)}));
+  const auto dir = std::filesystem::temp_directory_path() / ("yelan_usb_rec_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "rec.txt").string();
+  yelan::camera::StreamInfo info;
+  info.width = 346;
+  info.height = 260;
+  auto writer = yelan::camera::open_event_writer(path, info);
+  int polls = 0;
+  RecordResult r = record(d, t, *writer, [&] { return polls++ < 4; });  // "Ctrl-C" after 4 polls
+  CHECK(r.error.empty());
+  CHECK(r.events == 4);
+  CHECK_FALSE(t.bulk_running());
+  std::ifstream in(path);
+  REQUIRE(in.good());
+  std::vector<std::string> data;
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty() && line[0] != '#') data.push_back(line);
+  CHECK(data == std::vector<std::string>{"1 0 2 0", "101 1 2 1", "201 2 2 0", "301 3 2 1"});
+  int leftovers = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) leftovers += e.path().filename() != "rec.txt";
+  CHECK(leftovers == 0);  // no temporary file left beside it
+  std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("enumeration with libusb works and finds no camera on a machine without one", "[usb]") {
+  std::vector<DeviceInfo> found;
+  REQUIRE_NOTHROW(found = list_devices());
+  for (const DeviceInfo& d : found) {
+    CHECK(d.vendor_id == 0x152A);
+    CHECK((d.product_id == 0x841A || d.product_id == 0x8419));
+  }
+  if (!camera_attached()) CHECK(found.empty());
+}
+
+TEST_CASE("yelan devices without a camera says so and exits 0", "[usb]") {
+  if (camera_attached()) return;
+  CliResult r = cli({"devices"});
+  CHECK(r.code == 0);
+  CHECK_THAT(r.out, Catch::Contains("no camera found"));
+  CHECK(cli({"devices", "extra"}).code == 2);
+}
+
+TEST_CASE("yelan record without a camera exits 1 with a clear message and writes nothing", "[usb]") {
+  if (camera_attached()) return;
+  const auto path = std::filesystem::temp_directory_path() / ("yelan_usb_none_" + std::to_string(::getpid()) + ".txt");
+  CliResult r = cli({"record", "--duration", "1s", path.string()});
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("no camera found"));
+  CHECK_FALSE(std::filesystem::exists(path));
+}
+
+TEST_CASE("yelan record rejects bad durations and unknown output formats with exit 2", "[usb]") {
+  for (const char* bad : {"0s", "-1s", "ten", "10parsecs", "", "5x"}) {
+    INFO(bad);
+    CliResult r = cli({"record", "--duration", bad, "out.txt"});
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Catch::Contains("--duration expects"));
+  }
+  CliResult r = cli({"record", "--duration", "1s", "out.mp4"});
+  CHECK(r.code == 2);
+  CHECK_THAT(r.err, Catch::Contains("output format"));
+  CHECK(cli({"record"}).code == 2);
+  CHECK(cli({"record", "a.txt", "b.txt"}).code == 2);
+}
