@@ -11,4 +11,8 @@ namespace yelan::cli {
 int cmd_devices(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_record(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// engine/cli/cmd_events.cpp: event files (camera/io).
+int cmd_info(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int cmd_convert(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace yelan::cli

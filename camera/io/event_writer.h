@@ -1,0 +1,52 @@
+// Writing event files: ours (HDF5), AEDAT 4.0 and text. Writers stream (bounded memory) into
+// `<out>.tmp-<pid>` and rename it over `out` in close(), so a crash or an error never leaves
+// a half-written file under the real name. A writer destroyed without close() removes its
+// temporary file.
+#pragma once
+#include <memory>
+#include <span>
+#include <string>
+
+#include "camera/event.h"
+#include "camera/io/event_reader.h"
+
+namespace yelan::camera {
+
+class EventWriter {
+ public:
+  virtual ~EventWriter() = default;
+  virtual void write(std::span<const Event> events) = 0;
+  // Finishes the file and moves it to its final name.
+  virtual void close() = 0;
+};
+
+// The output format for a path: "yelan-h5" (.yelan.h5, .h5), "aedat4" (.aedat4), "text" (.txt);
+// empty when the extension names none of them.
+std::string writer_format_for(const std::string& path);
+
+// `info` gives the sensor size (0 = unknown) written into the file's header.
+std::unique_ptr<EventWriter> open_event_writer(const std::string& path, const StreamInfo& info);
+
+std::unique_ptr<EventWriter> open_text_writer(const std::string& path, const StreamInfo& info);
+std::unique_ptr<EventWriter> open_aedat4_writer(const std::string& path, const StreamInfo& info);
+std::unique_ptr<EventWriter> open_yelan_h5_writer(const std::string& path, const StreamInfo& info);
+
+// The temporary name beside `path` that writers fill before renaming.
+std::string temp_path_for(const std::string& path);
+
+// Owns a temporary path: commit() renames it to the final path; otherwise it is removed.
+class TempFile {
+ public:
+  explicit TempFile(std::string final_path);
+  ~TempFile();
+  TempFile(const TempFile&) = delete;
+  TempFile& operator=(const TempFile&) = delete;
+  const std::string& path() const { return temp_; }
+  void commit();
+
+ private:
+  std::string final_, temp_;
+  bool committed_ = false;
+};
+
+}  // namespace yelan::camera

@@ -1,0 +1,178 @@
+#include "camera/io/h5.h"
+
+namespace yelan::camera::h5 {
+
+void H5Id::reset() noexcept {
+  if (id_ >= 0) {
+    switch (H5Iget_type(id_)) {
+      case H5I_FILE: H5Fclose(id_); break;
+      case H5I_GROUP: H5Gclose(id_); break;
+      case H5I_DATASET: H5Dclose(id_); break;
+      case H5I_DATASPACE: H5Sclose(id_); break;
+      case H5I_DATATYPE: H5Tclose(id_); break;
+      case H5I_ATTR: H5Aclose(id_); break;
+      case H5I_GENPROP_LST: H5Pclose(id_); break;
+      default: H5Idec_ref(id_); break;
+    }
+  }
+  id_ = H5I_INVALID_HID;
+}
+
+H5Id check(hid_t id, const std::string& what) {
+  if (id < 0) throw H5Failure(what);
+  return H5Id(id);
+}
+
+void check(herr_t status, const std::string& what) {
+  if (status < 0) throw H5Failure(what);
+}
+
+void silence_errors() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+H5Id open_file(const std::string& path) {
+  silence_errors();
+  return check(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), "cannot open as HDF5");
+}
+
+H5Id create_file(const std::string& path) {
+  silence_errors();
+  return check(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), "cannot create " + path);
+}
+
+bool exists(hid_t loc, const std::string& path) {
+  std::string sofar;
+  std::size_t at = 0;
+  while (at <= path.size()) {
+    std::size_t slash = path.find('/', at);
+    sofar = path.substr(0, slash);
+    if (!sofar.empty() && H5Lexists(loc, sofar.c_str(), H5P_DEFAULT) <= 0) return false;
+    if (slash == std::string::npos) break;
+    at = slash + 1;
+  }
+  return true;
+}
+
+H5Id create_group(hid_t loc, const std::string& name) {
+  H5Id props = check(H5Pcreate(H5P_GROUP_CREATE), "group properties");
+  check(H5Pset_obj_track_times(props.get(), false), "group properties");
+  return check(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, props.get(), H5P_DEFAULT), "cannot create group " + name);
+}
+
+H5Id untimed_dataset_props() {
+  H5Id props = check(H5Pcreate(H5P_DATASET_CREATE), "dataset properties");
+  check(H5Pset_obj_track_times(props.get(), false), "dataset properties");
+  return props;
+}
+
+H5Id create_growing_1d(hid_t loc, const std::string& name, hid_t type, hsize_t chunk) {
+  hsize_t dims[1] = {0}, maxdims[1] = {H5S_UNLIMITED};
+  H5Id space = check(H5Screate_simple(1, dims, maxdims), "dataspace");
+  H5Id props = untimed_dataset_props();
+  check(H5Pset_chunk(props.get(), 1, &chunk), "chunking");
+  check(H5Pset_shuffle(props.get()), "shuffle filter");
+  check(H5Pset_deflate(props.get(), 4), "deflate filter");
+  return check(H5Dcreate2(loc, name.c_str(), type, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT),
+               "cannot create dataset " + name);
+}
+
+void append_1d(hid_t dataset, hid_t mem_type, const void* data, hsize_t n) {
+  if (n == 0) return;
+  const hsize_t old = shape(dataset).at(0);
+  hsize_t grown[1] = {old + n};
+  check(H5Dset_extent(dataset, grown), "cannot grow dataset");
+  H5Id file_space = check(H5Dget_space(dataset), "dataspace");
+  hsize_t start[1] = {old}, count[1] = {n};
+  check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "selection");
+  H5Id mem_space = check(H5Screate_simple(1, count, nullptr), "dataspace");
+  check(H5Dwrite(dataset, mem_type, mem_space.get(), file_space.get(), H5P_DEFAULT, data), "cannot write dataset");
+}
+
+std::vector<hsize_t> shape(hid_t dataset) {
+  H5Id space = check(H5Dget_space(dataset), "dataspace");
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank < 0 || rank > 8) throw H5Failure("bad dataset rank");
+  std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+  if (rank > 0) H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  return dims;
+}
+
+void read_rows(hid_t dataset, hid_t mem_type, hsize_t first, hsize_t n, void* out, int col) {
+  if (n == 0) return;
+  H5Id file_space = check(H5Dget_space(dataset), "dataspace");
+  if (col < 0) {
+    hsize_t start[1] = {first}, count[1] = {n};
+    check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "selection");
+  } else {
+    hsize_t start[2] = {first, static_cast<hsize_t>(col)}, count[2] = {n, 1};
+    check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "selection");
+  }
+  hsize_t mem_count[1] = {n};
+  H5Id mem_space = check(H5Screate_simple(1, mem_count, nullptr), "dataspace");
+  check(H5Dread(dataset, mem_type, mem_space.get(), file_space.get(), H5P_DEFAULT, out), "cannot read dataset");
+}
+
+void write_attr_string(hid_t loc, const std::string& name, const std::string& value) {
+  H5Id type = check(H5Tcopy(H5T_C_S1), "string type");
+  check(H5Tset_size(type.get(), value.empty() ? 1 : value.size()), "string type");
+  check(H5Tset_strpad(type.get(), H5T_STR_NULLPAD), "string type");
+  H5Id space = check(H5Screate(H5S_SCALAR), "dataspace");
+  H5Id attr = check(H5Acreate2(loc, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                    "cannot create attribute " + name);
+  check(H5Awrite(attr.get(), type.get(), value.data()), "cannot write attribute " + name);
+}
+
+void write_attr_i64(hid_t loc, const std::string& name, std::int64_t value) {
+  H5Id space = check(H5Screate(H5S_SCALAR), "dataspace");
+  H5Id attr = check(H5Acreate2(loc, name.c_str(), H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                    "cannot create attribute " + name);
+  check(H5Awrite(attr.get(), H5T_NATIVE_INT64, &value), "cannot write attribute " + name);
+}
+
+std::optional<std::string> read_attr_string(hid_t loc, const std::string& name) {
+  if (H5Aexists(loc, name.c_str()) <= 0) return std::nullopt;
+  H5Id attr = check(H5Aopen(loc, name.c_str(), H5P_DEFAULT), "attribute " + name);
+  H5Id type = check(H5Aget_type(attr.get()), "attribute type");
+  if (H5Tget_class(type.get()) != H5T_STRING) return std::nullopt;
+  H5Id space = check(H5Aget_space(attr.get()), "attribute space");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1) return std::nullopt;
+  if (H5Tis_variable_str(type.get()) > 0) {
+    char* s = nullptr;
+    H5Id mem = check(H5Tcopy(H5T_C_S1), "string type");
+    H5Tset_size(mem.get(), H5T_VARIABLE);
+    check(H5Aread(attr.get(), mem.get(), &s), "cannot read attribute " + name);
+    std::string v = s ? s : "";
+    H5free_memory(s);
+    return v;
+  }
+  const std::size_t n = H5Tget_size(type.get());
+  if (n == 0 || n > (1 << 20)) return std::nullopt;
+  std::string v(n, '\0');
+  check(H5Aread(attr.get(), type.get(), v.data()), "cannot read attribute " + name);
+  v.resize(v.find('\0') == std::string::npos ? v.size() : v.find('\0'));
+  return v;
+}
+
+std::optional<std::int64_t> read_attr_i64(hid_t loc, const std::string& name) {
+  if (H5Aexists(loc, name.c_str()) <= 0) return std::nullopt;
+  H5Id attr = check(H5Aopen(loc, name.c_str(), H5P_DEFAULT), "attribute " + name);
+  H5Id type = check(H5Aget_type(attr.get()), "attribute type");
+  const H5T_class_t cls = H5Tget_class(type.get());
+  if (cls != H5T_INTEGER && cls != H5T_FLOAT) return std::nullopt;
+  H5Id space = check(H5Aget_space(attr.get()), "attribute space");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1) return std::nullopt;
+  std::int64_t v = 0;
+  check(H5Aread(attr.get(), H5T_NATIVE_INT64, &v), "cannot read attribute " + name);
+  return v;
+}
+
+std::optional<std::int64_t> read_scalar_i64(hid_t loc, const std::string& name) {
+  if (!exists(loc, name)) return std::nullopt;
+  H5Id ds = check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), "dataset " + name);
+  H5Id space = check(H5Dget_space(ds.get()), "dataspace");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1) return std::nullopt;
+  std::int64_t v = 0;
+  check(H5Dread(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v), "cannot read " + name);
+  return v;
+}
+
+}  // namespace yelan::camera::h5
