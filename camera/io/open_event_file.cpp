@@ -1,6 +1,7 @@
 #include <cstring>
 
 #include "camera/io/aedat4.h"
+#include "camera/io/aedat_legacy.h"
 #include "camera/io/byte_source.h"
 #include "camera/io/readers.h"
 
@@ -47,8 +48,8 @@ std::unique_ptr<EventReader> open_event_file(const std::string& path) {
   if (f == "prophesee-raw") return open_prophesee_raw(path);
   if (f == "text") return open_text_events(path);
   if (f == "hdf5") return open_hdf5_events(path);
-  if (f == "aedat-old") throw FormatError(path, 0, "AEDAT 2.0/3.1 files are not supported yet");
-  if (f == "npy") throw FormatError(path, 0, ".npy event files are not supported yet");
+  if (f == "aedat-old") return open_aedat_legacy(path);
+  if (f == "npy") return open_npy_events(path);
   throw FormatError(path, 0, "unknown event file format (no known magic bytes or extension)");
 }
 

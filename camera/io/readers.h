@@ -13,5 +13,6 @@ std::unique_ptr<EventReader> open_text_events(const std::string& path);
 // HDF5: ours (root attribute format="yelan-recording"), DSEC (events/{x,y,p,t}, t_offset,
 // ms_to_idx) or v2e (an Nx4 `events` dataset: t, x, y, p).
 std::unique_ptr<EventReader> open_hdf5_events(const std::string& path);
+std::unique_ptr<EventReader> open_npy_events(const std::string& path);
 
 }  // namespace yelan::camera

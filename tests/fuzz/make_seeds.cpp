@@ -131,6 +131,43 @@ int main(int argc, char** argv) {
   write_events((out / "aedat4" / "ours_300.aedat4").string(), 300, 64, 48);
   write_events((out / "text" / "ours_20.txt").string(), 20, 346, 260);
   write_events((out / "hdf5" / "ours_50.yelan.h5").string(), 50, 346, 260);
+  // AEDAT 2.0 (DAVIS layout, big-endian) and 3.1 (one polarity packet).
+  {
+    const std::string h2 = "#!AER-DAT2.0\r\n# HardwareInterface: DAVIS346\r\n";
+    Bytes a2(h2.begin(), h2.end());
+    for (std::uint32_t i = 0; i < 32; ++i) {
+      const std::uint32_t addr = ((i * 7 % 260) << 22) | ((i * 11 % 346) << 12) | ((i & 1) << 11) | (i & 3);
+      const std::uint32_t ts = 1000 + 5 * i;
+      for (int k = 3; k >= 0; --k) a2.push_back(static_cast<unsigned char>(addr >> (8 * k)));
+      for (int k = 3; k >= 0; --k) a2.push_back(static_cast<unsigned char>(ts >> (8 * k)));
+    }
+    dump(out / "aedat_legacy" / "aedat2", a2);
+    const std::string h3 = "#!AER-DAT3.1\r\n#Source 1: DAVIS346\r\n#!END-HEADER\r\n";
+    Bytes a3(h3.begin(), h3.end());
+    for (std::int32_t v : {0x00010001, 8, 0, 0, 4, 4, 4}) put<std::int32_t>(a3, v);  // type 1, source 1
+    for (std::uint32_t i = 0; i < 4; ++i) {
+      put<std::uint32_t>(a3, ((i * 50) << 17) | ((i * 30) << 2) | ((i & 1) << 1) | 1u);
+      put<std::int32_t>(a3, static_cast<std::int32_t>(100 + i));
+    }
+    dump(out / "aedat_legacy" / "aedat3", a3);
+  }
+  // .npy: t i8, x i2, y i2, p u1 (expelliarmus' layout), 8 records.
+  {
+    std::string dict = "{'descr': [('t', '<i8'), ('x', '<i2'), ('y', '<i2'), ('p', '|u1')], "
+                       "'fortran_order': False, 'shape': (8,), }";
+    while ((10 + dict.size() + 1) % 64) dict += ' ';
+    dict += '\n';
+    Bytes n = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0};
+    put<std::uint16_t>(n, static_cast<std::uint16_t>(dict.size()));
+    n.insert(n.end(), dict.begin(), dict.end());
+    for (int i = 0; i < 8; ++i) {
+      put<std::int64_t>(n, 11718656 + i);
+      put<std::int16_t>(n, static_cast<std::int16_t>(i * 100));
+      put<std::int16_t>(n, static_cast<std::int16_t>(i * 50));
+      n.push_back(static_cast<unsigned char>(i & 1));
+    }
+    dump(out / "npy" / "expelliarmus_like", n);
+  }
   const std::string rpg = "240 180\n0.000001 1 2 1\n1.5,3,4,-1\n12.3456785 5 6 0\n1e-3 7 8 1\n";
   dump(out / "text" / "rpg", Bytes(rpg.begin(), rpg.end()));
   return 0;
