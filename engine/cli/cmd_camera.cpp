@@ -1,11 +1,9 @@
 // `yelan devices` and `yelan record`: list attached DAVIS346/DVXplorer cameras, and record
 // one of them to an event file through the clean-room libusb driver in camera/usb/.
-#include <atomic>
 #include <charconv>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <limits>
 #include <stdexcept>
 
 #include "camera/io/event_writer.h"

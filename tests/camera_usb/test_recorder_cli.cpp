@@ -120,6 +120,14 @@ TEST_CASE("enumeration with libusb works and finds no camera on a machine withou
   if (!camera_attached()) CHECK(found.empty());
 }
 
+TEST_CASE("opening a camera that is not attached is a UsbError naming it", "[usb]") {
+  DeviceInfo gone;
+  gone.model = Model::davis346;
+  gone.bus = 250;
+  gone.address = 127;
+  CHECK_THROWS_WITH(LibusbTransport(gone), Catch::Contains("DAVIS346 at bus 250 address 127"));
+}
+
 TEST_CASE("yelan devices without a camera says so and exits 0", "[usb]") {
   if (camera_attached()) return;
   CliResult r = cli({"devices"});
