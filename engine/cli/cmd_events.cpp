@@ -62,8 +62,9 @@ void print_json(std::ostream& out, const std::string& path, const camera::EventR
     << ", \"on_events\": " << s.on << ", \"off_events\": " << (s.events - s.on);
   if (any) {
     o << ", \"t_first_us\": " << s.t_first << ", \"t_last_us\": " << s.t_last
-      << ", \"duration_us\": " << (s.t_last - s.t_first) << std::setprecision(6) << ", \"event_rate_hz\": "
-      << rate_hz(s) << ", \"on_fraction\": " << static_cast<double>(s.on) / static_cast<double>(s.events)
+      << ", \"duration_us\": " << (s.t_last - s.t_first) << std::fixed << std::setprecision(1)
+      << ", \"event_rate_hz\": " << rate_hz(s) << std::setprecision(6)
+      << ", \"on_fraction\": " << static_cast<double>(s.on) / static_cast<double>(s.events)
       << ", \"x_max\": " << s.x_max << ", \"y_max\": " << s.y_max;
   } else {
     o << ", \"t_first_us\": null, \"t_last_us\": null, \"duration_us\": 0, \"event_rate_hz\": 0"

@@ -5,7 +5,9 @@
 #include <cstring>
 #include <random>
 
+#include "camera/io/compression.h"
 #include "camera/io/event_writer.h"
+#include "camera/io/flatbuf.h"
 #include "camera/io/h5.h"
 #include "io_test_util.h"
 #include "test_util.h"
@@ -180,4 +182,37 @@ TEST_CASE("AEDAT 4.0 writer emits a data table the header points to", "[io][aeda
   CHECK(b[static_cast<std::size_t>(table) + 1] == 0x22);
   CHECK(b[static_cast<std::size_t>(table) + 2] == 0x4D);
   CHECK(b[static_cast<std::size_t>(table) + 3] == 0x18);
+
+  // Decoded, it is a size-prefixed FTAB flatbuffer with one entry per packet of 8192 events.
+  std::vector<unsigned char> plain;
+  std::string problem;
+  REQUIRE(yelan::camera::decompress(yelan::camera::Codec::lz4, b.data() + table, b.size() - static_cast<std::size_t>(table),
+                                    1 << 20, plain, problem));
+  REQUIRE(plain.size() > 12);
+  CHECK(std::string(plain.begin() + 8, plain.begin() + 12) == "FTAB");
+  namespace flat = yelan::camera::flat;
+  flat::Table root = flat::root(plain.data() + 4, plain.size() - 4);
+  auto defs = flat::field_vector(root, 0, 4);
+  REQUIRE(defs);
+  REQUIRE(defs->second == 3);  // 20002 events: 8192 + 8192 + 3618
+  const std::int64_t want_count[3] = {8192, 8192, 3618};
+  const std::size_t want_first[3] = {0, 8192, 16384};
+  for (std::size_t i = 0; i < 3; ++i) {
+    flat::Table d = flat::table_at(plain.data() + 4, plain.size() - 4, defs->first + 4 * i);
+    const std::int64_t at = flat::field_i64(d, 0, -1);
+    std::int32_t stream = -1, size = 0;
+    std::memcpy(&stream, b.data() + at - 8, 4);
+    std::memcpy(&size, b.data() + at - 4, 4);
+    CHECK(stream == 0);
+    auto info = flat::field(d, 1, 8);
+    REQUIRE(info);
+    std::int32_t table_stream = -1, table_size = 0;
+    std::memcpy(&table_stream, plain.data() + 4 + *info, 4);
+    std::memcpy(&table_size, plain.data() + 4 + *info + 4, 4);
+    CHECK(table_stream == 0);
+    CHECK(table_size == size);
+    CHECK(flat::field_i64(d, 2, -1) == want_count[i]);
+    CHECK(flat::field_i64(d, 3, -1) == ev[want_first[i]].t);
+    CHECK(flat::field_i64(d, 4, -1) == ev[want_first[i] + static_cast<std::size_t>(want_count[i]) - 1].t);
+  }
 }
