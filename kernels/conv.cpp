@@ -140,6 +140,47 @@ void bwd_weights_scalar(const ConvShape& s, const float* x, const float* dy, flo
 
 }  // namespace
 
+namespace {
+
+// Adds a per-channel bias to (or sums per channel of) a blocked [n][cb][pixels][16] array.
+void add_channel_bias(int n, int cb, std::size_t pixels, const float* bias, float* y) {
+  for (int i = 0; i < n; ++i)
+    for (int b = 0; b < cb; ++b) {
+      float* p = y + (std::size_t(i) * cb + b) * pixels * kBlock;
+      for (std::size_t px = 0; px < pixels; ++px)
+        for (int l = 0; l < kBlock; ++l) p[px * kBlock + l] += bias[b * kBlock + l];
+    }
+}
+void channel_sums(int n, int cb, std::size_t pixels, const float* x, float* sums) {
+  std::fill(sums, sums + std::size_t(cb) * kBlock, 0.f);
+  for (int i = 0; i < n; ++i)
+    for (int b = 0; b < cb; ++b) {
+      const float* p = x + (std::size_t(i) * cb + b) * pixels * kBlock;
+      for (std::size_t px = 0; px < pixels; ++px)
+        for (int l = 0; l < kBlock; ++l) sums[b * kBlock + l] += p[px * kBlock + l];
+    }
+}
+
+}  // namespace
+
+void deconv_fwd(const ConvKernels& k, const DeconvShape& s, const float* x, const float* w_bwd, const float* bias,
+                float* y) {
+  const ConvShape c = s.as_conv();
+  k.bwd_data(c, x, w_bwd, y);
+  if (bias) add_channel_bias(s.n, c.icb(), std::size_t(c.ih) * c.iw, bias, y);
+}
+
+void deconv_bwd_data(const ConvKernels& k, const DeconvShape& s, const float* dy, const float* w_fwd, float* dx) {
+  k.fwd(s.as_conv(), dy, w_fwd, nullptr, dx);
+}
+
+void deconv_bwd_weights(const ConvKernels& k, const DeconvShape& s, const float* x, const float* dy, float* dw,
+                        float* dbias) {
+  const ConvShape c = s.as_conv();
+  k.bwd_weights(c, dy, x, dw, nullptr);
+  if (dbias) channel_sums(s.n, c.icb(), std::size_t(c.ih) * c.iw, dy, dbias);
+}
+
 const ConvKernels conv_scalar{Isa::scalar, fwd_scalar, bwd_data_scalar, bwd_weights_scalar};
 
 #if defined(__x86_64__)

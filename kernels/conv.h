@@ -52,6 +52,23 @@ struct ConvKernels {
   void (*bwd_weights)(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias);
 };
 
+// ConvTranspose2d (PyTorch semantics, weights (in, out, kh, kw)) is the adjoint of the conv
+// `as_conv()` whose input is the deconv's output: deconv forward = that conv's
+// backward-data, deconv backward-data = its forward, deconv weight gradient = its
+// backward-weights with x and dy swapped. PyTorch's (in, out, kh, kw) weights are exactly
+// that conv's OIHW, so they pack with pack_conv_weights(as_conv(), ...) unchanged.
+struct DeconvShape {
+  int n = 1, ic = 1, ih = 1, iw = 1, oc = 1, kh = 1, kw = 1;
+  int stride = 1, pad_h = 0, pad_w = 0, out_pad_h = 0, out_pad_w = 0;
+  int oh() const { return (ih - 1) * stride - 2 * pad_h + kh + out_pad_h; }
+  int ow() const { return (iw - 1) * stride - 2 * pad_w + kw + out_pad_w; }
+  ConvShape as_conv() const { return {n, oc, oh(), ow(), ic, kh, kw, stride, pad_h, pad_w}; }
+  bool valid() const {
+    return out_pad_h >= 0 && out_pad_w >= 0 && out_pad_h < stride && out_pad_w < stride && oh() > 0 &&
+           ow() > 0 && as_conv().valid() && as_conv().oh() == ih && as_conv().ow() == iw;
+  }
+};
+
 const ConvKernels& conv_kernels(Isa isa);
 inline const ConvKernels& conv_kernels() { return conv_kernels(active_isa()); }
 extern const ConvKernels conv_scalar;  // plain loops: the reference for every variant
@@ -60,5 +77,14 @@ enum class ConvPack { fwd, bwd_data };
 std::size_t conv_weight_floats(const ConvShape& s);  // either packed layout
 void pack_conv_weights(const ConvShape& s, const float* w_oihw, ConvPack pack, float* out);
 void unpack_conv_weights(const ConvShape& s, const float* w_fwd, float* w_oihw);
+
+// Transposed convolution through the conv kernels (see DeconvShape). Weights are packed
+// for as_conv(): ConvPack::bwd_data for forward, ConvPack::fwd for backward-data.
+void deconv_fwd(const ConvKernels& k, const DeconvShape& s, const float* x, const float* w_bwd, const float* bias,
+                float* y);
+void deconv_bwd_data(const ConvKernels& k, const DeconvShape& s, const float* dy, const float* w_fwd, float* dx);
+// dw in the fwd packed layout of as_conv(); dbias (may be null): per output channel sums.
+void deconv_bwd_weights(const ConvKernels& k, const DeconvShape& s, const float* x, const float* dy, float* dw,
+                        float* dbias);
 
 }  // namespace yelan::kernels

@@ -183,3 +183,68 @@ TEST_CASE("conv shapes outside the supported range are reported invalid", "[kern
   CHECK_FALSE(shape_of({1, 3, 20, 20, 4, 13, 1, 1}).valid());  // above kMaxKernel
   CHECK(shape_of({1, 3, 8, 8, 4, 3, 2, 1}).valid());
 }
+
+TEST_CASE("transposed conv (3x3/2 with output_padding, 2x2/2, 1x1/2) matches its definition", "[kernels][deconv]") {
+  struct D { int n, ic, ih, iw, oc, k, stride, pad, oph, opw; };
+  for (const D& d : {D{1, 64, 17, 22, 64, 3, 2, 1, 0, 1}, D{1, 3, 7, 5, 13, 3, 2, 1, 1, 1}, D{2, 17, 4, 3, 5, 2, 2, 0, 0, 0},
+                     D{1, 13, 5, 7, 17, 1, 2, 0, 1, 1}, D{1, 128, 9, 11, 64, 3, 2, 1, 0, 0}}) {
+    DeconvShape s;
+    s.n = d.n; s.ic = d.ic; s.ih = d.ih; s.iw = d.iw; s.oc = d.oc; s.kh = s.kw = d.k; s.stride = d.stride;
+    s.pad_h = s.pad_w = d.pad; s.out_pad_h = d.oph; s.out_pad_w = d.opw;
+    REQUIRE(s.valid());
+    const int OH = s.oh(), OW = s.ow();
+    const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 41);
+    const auto w = random_floats(std::size_t(s.ic) * s.oc * s.kh * s.kw, 42);  // (in, out, kh, kw)
+    const auto b = random_floats(s.oc, 43);
+    const auto dy = random_floats(std::size_t(s.n) * s.oc * OH * OW, 44);
+    // The definition: every input pixel scatters w[i][o] into the output at ih*s - p + kh.
+    std::vector<double> y(dy.size()), mag(dy.size()), dx(x.size()), dw(w.size()), db(s.oc);
+    for (int n = 0; n < s.n; ++n)
+      for (int o = 0; o < s.oc; ++o)
+        for (int p = 0; p < OH * OW; ++p) {
+          y[(std::size_t(n) * s.oc + o) * OH * OW + p] = b[o];
+          mag[(std::size_t(n) * s.oc + o) * OH * OW + p] = std::abs(b[o]);
+          db[o] += dy[(std::size_t(n) * s.oc + o) * OH * OW + p];
+        }
+    for (int n = 0; n < s.n; ++n)
+      for (int i = 0; i < s.ic; ++i)
+        for (int ih = 0; ih < s.ih; ++ih)
+          for (int iw = 0; iw < s.iw; ++iw)
+            for (int o = 0; o < s.oc; ++o)
+              for (int kh = 0; kh < s.kh; ++kh)
+                for (int kw = 0; kw < s.kw; ++kw) {
+                  const int oh = ih * s.stride - s.pad_h + kh, ow = iw * s.stride - s.pad_w + kw;
+                  if (oh < 0 || oh >= OH || ow < 0 || ow >= OW) continue;
+                  const std::size_t xi = ((std::size_t(n) * s.ic + i) * s.ih + ih) * s.iw + iw;
+                  const std::size_t wi = ((std::size_t(i) * s.oc + o) * s.kh + kh) * s.kw + kw;
+                  const std::size_t yi = ((std::size_t(n) * s.oc + o) * OH + oh) * OW + ow;
+                  y[yi] += double(x[xi]) * w[wi];
+                  mag[yi] += std::abs(double(x[xi]) * w[wi]);
+                  dx[xi] += double(dy[yi]) * w[wi];
+                  dw[wi] += double(dy[yi]) * x[xi];
+                }
+    const ConvShape c = s.as_conv();
+    std::vector<float> wf(conv_weight_floats(c)), wb(conv_weight_floats(c));
+    pack_conv_weights(c, w.data(), ConvPack::fwd, wf.data());
+    pack_conv_weights(c, w.data(), ConvPack::bwd_data, wb.data());
+    std::vector<float> bias(std::size_t(c.icb()) * kBlock, 0.f);
+    std::copy(b.begin(), b.end(), bias.begin());
+    const auto xb = to_blocked(x, s.n, s.ic, s.ih, s.iw);
+    const auto dyb = to_blocked(dy, s.n, s.oc, OH, OW);
+    for (Isa isa : yelan::test::supported_isas()) {
+      INFO("isa " << isa_name(isa) << " deconv " << d.ic << "->" << d.oc << " " << d.ih << "x" << d.iw << " k" << d.k);
+      const ConvKernels& k = conv_kernels(isa);
+      std::vector<float> yb(dyb.size()), dxb(xb.size()), dwp(wf.size()), dbb(bias.size());
+      deconv_fwd(k, s, xb.data(), wb.data(), bias.data(), yb.data());
+      deconv_bwd_data(k, s, dyb.data(), wf.data(), dxb.data());
+      deconv_bwd_weights(k, s, xb.data(), dyb.data(), dwp.data(), dbb.data());
+      REQUIRE(padding_is_zero(yb, s.n, s.oc, OH, OW));
+      std::vector<float> dwo(w.size());
+      unpack_conv_weights(c, dwp.data(), dwo.data());
+      check_close("y", from_blocked(yb, s.n, s.oc, OH, OW), y, mag, 1e-5);
+      check_close("dx", from_blocked(dxb, s.n, s.ic, s.ih, s.iw), dx, abs_scale(dx, 0.25 * std::sqrt(double(s.oc) * s.kh * s.kw)), 1e-5);
+      check_close("dw", dwo, dw, abs_scale(dw, 0.25 * std::sqrt(double(s.n) * s.ih * s.iw)), 1e-5);
+      check_close("db", std::vector<float>(dbb.begin(), dbb.begin() + s.oc), db, abs_scale(db, 0.5 * std::sqrt(double(OH) * OW * s.n)), 1e-5);
+    }
+  }
+}
