@@ -188,6 +188,7 @@ std::vector<DeviceInfo> list_devices() {
     info.product_id = desc.idProduct;
     info.bus = libusb_get_bus_number(dev);
     info.address = libusb_get_device_address(dev);
+    info.firmware = desc.bcdDevice & 0xFF;
     libusb_device_handle* h = nullptr;
     if (int r = libusb_open(dev, &h); r != LIBUSB_SUCCESS) {
       info.note = "cannot open to read the serial (" + usb_error(r) +

@@ -20,6 +20,7 @@ struct DeviceInfo {
   Model model = Model::davis346;
   std::uint16_t vendor_id = 0, product_id = 0;
   std::uint8_t bus = 0, address = 0;
+  int firmware = -1;   // bcdDevice low byte, the USB firmware version
   std::string serial;  // empty when the device could not be opened to read it
   std::string note;    // why the serial is missing (e.g. permissions), else empty
 };

@@ -66,7 +66,8 @@ std::string describe(const usb::DeviceInfo& d) {
   char where[48];
   std::snprintf(where, sizeof where, "bus %03u address %03u", d.bus, d.address);
   return std::string(usb::model_name(d.model)) + "  " + where + "  serial " +
-         (d.serial.empty() ? "?" : d.serial) + (d.note.empty() ? "" : "  (" + d.note + ")");
+         (d.serial.empty() ? "?" : d.serial) + "  firmware " + std::to_string(d.firmware) +
+         (d.note.empty() ? "" : "  (" + d.note + ")");
 }
 
 const char* kNoCamera =
@@ -134,7 +135,8 @@ int cmd_record(const std::vector<std::string>& args, std::ostream& out, std::ost
   out << "recorded " << r.events << " events";
   if (r.events > 0) out << " (t " << r.t_first << " .. " << r.t_last << " us)";
   out << " from " << describe(*chosen) << " to " << path << (g_interrupted ? " (interrupted)" : "") << "\n";
-  out << "decoder: " << r.stats.summary() << "\n";
+  out << "camera: chip " << info.chip_id << ", logic revision " << info.logic_version << ", " << info.width << "x"
+      << info.height << "; decoder: " << r.stats.summary() << "\n";
   if (!r.error.empty()) {
     err << "yelan record: the camera stream ended early: " << r.error << "; the " << r.events
         << " events decoded before are in " << path << "\n";
