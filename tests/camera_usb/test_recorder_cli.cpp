@@ -3,8 +3,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
+#include "camera/io/event_reader.h"
 #include "camera/io/event_writer.h"
 #include "camera/usb/davis_device.h"
 #include "camera/usb/fake_transport.h"
@@ -16,6 +18,7 @@
 
 using namespace yelan::camera::usb;
 using yelan::camera::Event;
+using yelan::camera::usb::DavisDecoder;
 using yelan::test::usb::bytes;
 using yelan::test::usb::col;
 using yelan::test::usb::row;
@@ -157,4 +160,65 @@ TEST_CASE("yelan record rejects bad durations and unknown output formats with ex
   CHECK_THAT(r.err, Catch::Contains("output format"));
   CHECK(cli({"record"}).code == 2);
   CHECK(cli({"record", "a.txt", "b.txt"}).code == 2);
+}
+
+TEST_CASE("record: .txt, .aedat4 and .yelan.h5 recordings read back as the decoded events", "[usb]") {
+  // A stream with every DAVIS word kind, cut into USB buffers of odd sizes.
+  std::mt19937 rng(5);
+  std::vector<std::uint16_t> words = {ts(0), row(0)};
+  std::uint16_t t = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const unsigned k = rng() % 10;
+    if (k == 0) {
+      t = static_cast<std::uint16_t>(std::min<int>(0x7FFF, t + 1 + rng() % 40));
+      words.push_back(ts(t));
+    } else if (k == 1 && rng() % 20 == 0) {
+      words.push_back(wrap(1));
+      t = 0;
+    } else if (k == 2) {
+      words.push_back(row(static_cast<std::uint16_t>(rng() % 260)));
+    } else if (k == 3) {
+      words.push_back(yelan::test::usb::code(5, static_cast<std::uint16_t>(rng() % 256)));  // IMU byte
+    } else {
+      words.push_back(col(static_cast<std::uint16_t>(rng() % 346), rng() % 2));
+    }
+  }
+  const std::vector<std::uint8_t> stream = bytes(words);
+  std::vector<Event> expected;
+  DavisDecoder reference;
+  reference.feed(stream, expected);
+  REQUIRE(expected.size() > 10000);
+
+  const auto dir = std::filesystem::temp_directory_path() / ("yelan_usb_fmt_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const char* name : {"rec.txt", "rec.aedat4", "rec.yelan.h5"}) {
+    INFO(name);
+    FakeTransport t = fake_davis346();
+    DavisDevice d(t, [](auto) {});
+    d.open();
+    d.configure();
+    for (std::size_t at = 0; at < stream.size();) {
+      const std::size_t n = std::min<std::size_t>(stream.size() - at, 1 + rng() % 9000);
+      t.queue_buffer({stream.begin() + static_cast<std::ptrdiff_t>(at), stream.begin() + static_cast<std::ptrdiff_t>(at + n)});
+      at += n;
+    }
+    t.unplug_after_queue();
+    const std::string path = (dir / name).string();
+    yelan::camera::StreamInfo info;
+    info.width = 346;
+    info.height = 260;
+    auto writer = yelan::camera::open_event_writer(path, info);
+    RecordResult r = record(d, t, *writer, [] { return true; });
+    REQUIRE(r.events == expected.size());
+    auto reader = yelan::camera::open_event_file(path);
+    std::vector<Event> back;
+    while (reader->read(back, 1 << 16) > 0) {
+    }
+    CHECK(reader->info().width == 346);
+    CHECK(reader->info().height == 260);
+    CHECK(reader->warnings().total() == 0);
+    REQUIRE(back.size() == expected.size());
+    CHECK(back == expected);
+  }
+  std::filesystem::remove_all(dir);
 }
