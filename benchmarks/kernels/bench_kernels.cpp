@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <iomanip>
@@ -138,21 +139,33 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
       for (const ConvCase& c : network_conv_cases()) {
         if (quick && !(c.k == 3 && c.stride == 1)) continue;
         if (!only.empty() && c.where.find(only) == std::string::npos) continue;
+        kernels::DeconvShape d;
+        d.n = 1; d.ic = c.cin; d.ih = c.h; d.iw = c.w; d.oc = c.cout; d.kh = d.kw = c.k; d.stride = c.stride;
+        d.pad_h = d.pad_w = c.pad; d.out_pad_h = c.out_pad_h; d.out_pad_w = c.out_pad_w;
         kernels::ConvShape s;
-        s.n = 1; s.ic = c.cin; s.ih = c.h; s.iw = c.w; s.oc = c.cout;
-        s.kh = s.kw = c.k; s.stride = c.stride; s.pad_h = s.pad_w = c.pad;
+        if (c.transposed) {
+          s = d.as_conv();
+        } else {
+          s.n = 1; s.ic = c.cin; s.ih = c.h; s.iw = c.w; s.oc = c.cout;
+          s.kh = s.kw = c.k; s.stride = c.stride; s.pad_h = s.pad_w = c.pad;
+        }
         const std::size_t xn = std::size_t(s.icb()) * s.ih * s.iw * 16;
         const std::size_t yn = std::size_t(s.ocb()) * s.oh() * s.ow() * 16;
-        Buffer x(xn, 1), y(yn, 2), w(kernels::conv_weight_floats(s), 3), bias(s.ocb() * 16, 4);
+        Buffer x(xn, 1), y(yn, 2), w(kernels::conv_weight_floats(s), 3), bias(std::max(s.ocb(), s.icb()) * 16, 4);
         struct Op {
           const char* op;
           std::function<void()> fn;
         };
-        const Op ops[] = {
-            {"conv2d.fwd", [&] { k.fwd(s, x.p, w.p, bias.p, y.p); }},
-            {"conv2d.bwd_data", [&] { k.bwd_data(s, y.p, w.p, x.p); }},
-            {"conv2d.bwd_weights", [&] { k.bwd_weights(s, x.p, y.p, w.p, bias.p); }},
-        };
+        std::vector<Op> ops;
+        if (c.transposed) {  // deconv input = conv's y, deconv output = conv's x
+          ops = {{"deconv2d.fwd", [&] { kernels::deconv_fwd(k, d, y.p, w.p, bias.p, x.p); }},
+                 {"deconv2d.bwd_data", [&] { kernels::deconv_bwd_data(k, d, x.p, w.p, y.p); }},
+                 {"deconv2d.bwd_weights", [&] { kernels::deconv_bwd_weights(k, d, y.p, x.p, w.p, bias.p); }}};
+        } else {
+          ops = {{"conv2d.fwd", [&] { k.fwd(s, x.p, w.p, bias.p, y.p); }},
+                 {"conv2d.bwd_data", [&] { k.bwd_data(s, y.p, w.p, x.p); }},
+                 {"conv2d.bwd_weights", [&] { k.bwd_weights(s, x.p, y.p, w.p, bias.p); }}};
+        }
         for (const auto& op : ops) {
           const double sec = median_seconds_per_call(op.fn, reps, quick ? 0.02 : 0.05);
           Record r{c.where, op.op, "direct", c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,
@@ -177,7 +190,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
     std::vector<Bar> bars;
     for (const Record& r : recs)
       if (r.threads == thread_counts.front() && r.isa == kernels::isa_name(isas.back()))
-        bars.push_back({r.where + " " + r.op.substr(7), r.pct_peak});
+        bars.push_back({r.where + " " + r.op, r.pct_peak});
     write_bar_chart_svg(*chart, "% of measured FMA peak, " + std::string(kernels::isa_name(isas.back())) + ", " +
                                     std::to_string(thread_counts.front()) + " thread(s)", bars, 100.0);
     err << "chart written to " << *chart << "\n";

@@ -8,8 +8,9 @@ namespace yelan::bench {
 
 struct ConvCase {
   std::string where;
-  int cin, cout, h, w, k, stride, pad;
+  int cin, cout, h, w, k, stride, pad;  // h, w: the input's size
   bool transposed = false;
+  int out_pad_h = 0, out_pad_w = 0;
 };
 
 inline const std::vector<ConvCase>& network_conv_cases() {
@@ -37,6 +38,13 @@ inline const std::vector<ConvCase>& network_conv_cases() {
       {"unet.down2", 256, 256, 65, 86, 3, 1, 1},
       {"unet.down3", 512, 512, 32, 43, 3, 1, 1},
       {"unet.down4", 1024, 1024, 16, 21, 3, 1, 1},
+      // transposed convolutions: hourglass and residual up blocks, U-Net ups
+      {"hourglass.up", 128, 64, 17, 22, 3, 2, 1, true, 0, 1},
+      {"hourglass.up.shortcut", 128, 64, 17, 22, 1, 2, 0, true, 0, 1},
+      {"unet.up1", 1024, 512, 16, 21, 2, 2, 0, true},
+      {"unet.up2", 512, 256, 32, 43, 2, 2, 0, true},
+      {"unet.up3", 256, 128, 65, 86, 2, 2, 0, true},
+      {"unet.up4", 128, 64, 130, 173, 2, 2, 0, true},
   };
   return cases;
 }
