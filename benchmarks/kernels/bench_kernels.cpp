@@ -13,6 +13,7 @@
 #include "benchmarks/kernels/chart.h"
 #include "benchmarks/kernels/shapes.h"
 #include "benchmarks/kernels/timing.h"
+#include "benchmarks/kernels/torch_reference.h"
 #include "engine/aligned.h"
 #include "engine/cli/args.h"
 #include "engine/threads.h"
@@ -30,6 +31,7 @@ struct Record {
   std::string isa;
   int threads;
   double ms, gflops, peak_gflops, pct_peak;
+  double torch_gflops = 0;  // 0: not measured
 };
 
 struct Buffer {
@@ -102,7 +104,9 @@ void print_json(std::ostream& out, const std::vector<Record>& recs) {
         << ", \"cin\": " << r.cin << ", \"cout\": " << r.cout << ", \"h\": " << r.h << ", \"w\": " << r.w
         << ", \"algo\": \"" << r.algo << "\", \"isa\": \"" << r.isa << "\", \"threads\": " << r.threads
         << ", \"ms\": " << r.ms << ", \"gflops\": " << r.gflops << ", \"peak_gflops\": " << r.peak_gflops
-        << ", \"pct_peak\": " << r.pct_peak << "}" << (i + 1 < recs.size() ? "," : "") << "\n";
+        << ", \"pct_peak\": " << r.pct_peak;
+    if (r.torch_gflops > 0) out << ", \"torch_gflops\": " << r.torch_gflops;
+    out << "}" << (i + 1 < recs.size() ? "," : "") << "\n";
   }
   out << "]\n";
 }
@@ -111,7 +115,7 @@ void print_json(std::ostream& out, const std::vector<Record>& recs) {
 
 int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   cli::Args args("bench kernels", argv, {"--isa-list", "--threads-list", "--reps", "--chart", "--only"},
-                 {"--quick", "--json"});
+                 {"--quick", "--json", "--no-torch"});
   args.expect_positionals(0, 0);
   const bool quick = args.flag("--quick");
   const int reps = args.int_value_or("--reps", quick ? 3 : 5, 1, 100);
@@ -127,6 +131,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
   const std::string only = args.value_or("--only", "");
 
   std::vector<Record> recs;
+  std::vector<ConvCase> used;
   const int saved_threads = threads();
   const Isa saved_isa = kernels::active_isa();
   for (Isa isa : isas) {
@@ -139,6 +144,8 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
       for (const ConvCase& c : network_conv_cases()) {
         if (quick && !(c.k == 3 && c.stride == 1)) continue;
         if (!only.empty() && c.where.find(only) == std::string::npos) continue;
+        if (std::none_of(used.begin(), used.end(), [&](const ConvCase& u) { return u.where == c.where; }))
+          used.push_back(c);
         kernels::DeconvShape d;
         d.n = 1; d.ic = c.cin; d.ih = c.h; d.iw = c.w; d.oc = c.cout; d.kh = d.kw = c.k; d.stride = c.stride;
         d.pad_h = d.pad_w = c.pad; d.out_pad_h = c.out_pad_h; d.out_pad_w = c.out_pad_w;
@@ -172,19 +179,37 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
                    kernels::isa_name(isa), t, sec * 1e3, s.flops() / sec / 1e9, peak, 0};
           r.pct_peak = 100.0 * r.gflops / peak;
           recs.push_back(r);
-          if (!args.flag("--json")) {
-            char line[200];
-            std::snprintf(line, sizeof line, "%-22s %-19s %dx%d/%d %4d->%-4d %3dx%-3d %-6s %d  %9.3f ms %7.1f GFLOP/s %5.1f%%\n",
-                          c.where.c_str(), op.op, c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,
-                          kernels::isa_name(isa), t, r.ms, r.gflops, r.pct_peak);
-            out << line << std::flush;
-          }
+          err << "  " << r.where << " " << r.op << ": " << std::setprecision(3) << r.ms << " ms\n";
         }
       }
     }
   }
   set_threads(saved_threads);
   kernels::set_isa(saved_isa);
+  if (!args.flag("--no-torch")) {
+    std::string why;
+    const TorchTimes torch = torch_conv_times(used, thread_counts, reps, &why);
+    if (!why.empty()) err << "no PyTorch comparison: " << why << "\n";
+    for (Record& r : recs) {
+      auto it = torch.find({r.where, r.op, r.threads});
+      if (it != torch.end() && it->second > 0) r.torch_gflops = r.gflops * r.ms / it->second;
+    }
+  }
+  if (!args.flag("--json")) {
+    out << "where                  op                   kernel  cin->cout  HxW     isa   thr        ms   GFLOP/s  %peak  torch  ours/torch\n";
+    for (const Record& r : recs) {
+      char line[256];
+      std::snprintf(line, sizeof line, "%-22s %-20s %dx%d/%d %4d->%-4d %3dx%-3d %-6s %d %9.3f %9.1f %6.1f",
+                    r.where.c_str(), r.op.c_str(), r.kh, r.kw, r.stride, r.cin, r.cout, r.h, r.w, r.isa.c_str(),
+                    r.threads, r.ms, r.gflops, r.pct_peak);
+      out << line;
+      if (r.torch_gflops > 0) {
+        std::snprintf(line, sizeof line, " %6.1f %8.2fx", r.torch_gflops, r.gflops / r.torch_gflops);
+        out << line;
+      }
+      out << "\n";
+    }
+  }
   if (args.flag("--json")) print_json(out, recs);
   if (auto chart = args.value("--chart")) {
     std::vector<Bar> bars;

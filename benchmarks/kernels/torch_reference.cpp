@@ -1,0 +1,76 @@
+#include "benchmarks/kernels/torch_reference.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#ifndef YELAN_SOURCE_DIR
+#define YELAN_SOURCE_DIR "."
+#endif
+
+namespace yelan::bench {
+namespace {
+
+// The value after `"key": ` in one flat JSON object written by conv_bench.py.
+std::string field(const std::string& obj, const std::string& key) {
+  const std::string k = "\"" + key + "\": ";
+  auto at = obj.find(k);
+  if (at == std::string::npos) return {};
+  at += k.size();
+  if (obj[at] == '"') return obj.substr(at + 1, obj.find('"', at + 1) - at - 1);
+  return obj.substr(at, obj.find_first_of(",}", at) - at);
+}
+
+}  // namespace
+
+TorchTimes torch_conv_times(const std::vector<ConvCase>& cases, const std::vector<int>& threads, int reps,
+                            std::string* why) {
+  TorchTimes out;
+  const char* env = std::getenv("YELAN_TORCH_SCRIPT");
+  const std::string script = env ? env : YELAN_SOURCE_DIR "/benchmarks/torch/conv_bench.py";
+  if (std::system("/usr/bin/python3 -c 'import torch' >/dev/null 2>&1") != 0) {
+    *why = "PyTorch is not importable by /usr/bin/python3 (apt-get install python3-torch)";
+    return out;
+  }
+  std::ostringstream req;
+  req << "{\"reps\": " << reps << ", \"threads\": [";
+  for (std::size_t i = 0; i < threads.size(); ++i) req << (i ? ", " : "") << threads[i];
+  req << "], \"cases\": [";
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const ConvCase& c = cases[i];
+    const std::string kind = c.transposed ? "deconv2d" : "conv2d";
+    req << (i ? ", " : "") << "{\"where\": \"" << c.where << "\", \"cin\": " << c.cin << ", \"cout\": " << c.cout
+        << ", \"h\": " << c.h << ", \"w\": " << c.w << ", \"k\": " << c.k << ", \"stride\": " << c.stride
+        << ", \"pad\": " << c.pad << ", \"transposed\": " << (c.transposed ? "true" : "false")
+        << ", \"out_pad_h\": " << c.out_pad_h << ", \"out_pad_w\": " << c.out_pad_w << ", \"ops\": [\"" << kind
+        << ".fwd\", \"" << kind << ".bwd_data\", \"" << kind << ".bwd_weights\"]}";
+  }
+  req << "]}";
+  const std::string tmp = "/tmp/yelan-torch-req-" + std::to_string(::getpid()) + ".json";
+  std::ofstream(tmp) << req.str();
+  const std::string cmd = "/usr/bin/python3 " + script + " < " + tmp;
+  FILE* p = ::popen(cmd.c_str(), "r");
+  std::string text;
+  if (p) {
+    char buf[4096];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) text.append(buf, n);
+    if (::pclose(p) != 0) text.clear();
+  }
+  std::remove(tmp.c_str());
+  if (text.empty()) {
+    *why = "the PyTorch script failed: " + cmd;
+    return out;
+  }
+  for (std::size_t at = text.find('{'); at != std::string::npos; at = text.find('{', at + 1)) {
+    const std::string obj = text.substr(at, text.find('}', at) - at + 1);
+    out[{field(obj, "where"), field(obj, "op"), std::atoi(field(obj, "threads").c_str())}] =
+        std::atof(field(obj, "ms").c_str());
+  }
+  return out;
+}
+
+}  // namespace yelan::bench
