@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "camera/event.h"
+#include "camera/io/event_reader.h"
+#include "camera/repr/filters.h"
 #include "camera/repr/tore.h"
 #include "engine/cli/args.h"
 #include "kernels/cpu.h"
@@ -90,7 +92,7 @@ void print_json(const std::vector<Record>& recs, std::ostream& out) {
 }  // namespace
 
 int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench events", argv, {"--events", "--reps", "--k", "--width", "--height"},
+  cli::Args args("bench events", argv, {"--events", "--reps", "--k", "--width", "--height", "--file"},
                  {"--quick", "--json"});
   args.expect_positionals(0, 0);
   const bool quick = args.flag("--quick");
@@ -100,19 +102,54 @@ int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, st
   const int width = args.int_value_or("--width", 346, 1, 8192);
   const int height = args.int_value_or("--height", 260, 1, 8192);
 
+  std::vector<std::pair<std::string, std::vector<Event>>> streams = {
+      {"tore_update_random", random_stream(n, width, height, 1)},
+      {"tore_update_edge", edge_stream(n, width, height, 2)}};
+  if (auto file = args.value("--file")) {
+    // A real recording, replayed from memory (its first --events events).
+    auto reader = camera::open_event_file(*file);
+    if (reader->info().width != width || reader->info().height != height)
+      throw cli::UsageError("--file " + *file + " is " + std::to_string(reader->info().width) + "x" +
+                            std::to_string(reader->info().height) + "; give the same --width/--height");
+    std::vector<Event> ev;
+    while (ev.size() < std::size_t(n) && reader->read(ev, std::size_t(n) - ev.size()) > 0) {}
+    streams.emplace_back("tore_update_file", std::move(ev));
+  }
+
   std::vector<Record> recs;
   camera::ToreVolume tore(width, height, {k});
 
   // Baseline for updates: copying the event bytes once (the least any update must read).
-  for (auto [name, stream] : {std::pair{"tore_update_random", random_stream(n, width, height, 1)},
-                              std::pair{"tore_update_edge", edge_stream(n, width, height, 2)}}) {
+  for (auto& [name, stream] : streams) {
     std::vector<Event> copy(stream.size());
     const std::size_t bytes = stream.size() * sizeof(Event);
     const double base = median_seconds(reps, [&] { std::memcpy(copy.data(), stream.data(), bytes); });
     tore.reset();
     tore.update(stream);  // warm the FIFO pages
     const double s = median_seconds(reps, [&] { tore.update(stream); });
-    recs.push_back({name, "Mev/s", n / s / 1e6, s, base, "memcpy", bytes});
+    recs.push_back({name, "Mev/s", stream.size() / s / 1e6, s, base, "memcpy", bytes});
+  }
+  // The filters on the edge stream, for scale (their own state: one int64 per pixel).
+  {
+    const auto& stream = streams[1].second;
+    std::vector<Event> copy(stream.size());
+    const std::size_t bytes = stream.size() * sizeof(Event);
+    const double base = median_seconds(reps, [&] { std::memcpy(copy.data(), stream.data(), bytes); });
+    camera::BackgroundActivityFilter baf(width, height);
+    std::size_t kept = 0;
+    const double s_baf = median_seconds(reps, [&] {
+      baf.reset();
+      kept = 0;
+      for (const Event& e : stream) kept += baf.accept(e);
+    });
+    recs.push_back({"baf_filter_edge", "Mev/s", stream.size() / s_baf / 1e6, s_baf, base, "memcpy", bytes});
+    camera::RefractoryFilter refractory(width, height, 1000);
+    const double s_ref = median_seconds(reps, [&] {
+      refractory.reset();
+      kept = 0;
+      for (const Event& e : stream) kept += refractory.accept(e);
+    });
+    recs.push_back({"refractory_filter_edge", "Mev/s", stream.size() / s_ref / 1e6, s_ref, base, "memcpy", bytes});
   }
 
   // Read-out of a volume after a full stream, against memset of the volume's bytes.
@@ -138,7 +175,7 @@ int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, st
     print_json(recs, out);
   } else {
     out << "events bench: " << width << "x" << height << ", K=" << k << ", " << n
-        << " events, median of " << reps << ", 1 thread, isa "
+        << " events per stream, median of " << reps << ", 1 thread, isa "
         << kernels::isa_name(kernels::active_isa()) << "\n";
     print_text(recs, out);
   }

@@ -32,8 +32,21 @@ const std::vector<Command>& commands() {
        "t_last_us, ...). Bad input exits 2 with `yelan: error: FILE: offset N: problem`.\n",
        cmd_info, "event readers (issue 5)"},
       {"repr", "TORE volumes and baseline frames from an event file",
-       "usage: yelan repr --type tore|count|voxel|surface --at T1,T2,... IN OUT.h5\n",
-       nullptr, "representations (issue 5)"},
+       "usage: yelan repr --type tore|tore-baldwin|count|voxel|surface (--at T1,T2,... | --fps F)\n"
+       "                  [--k 3] [--tau-us US] [--window-us 20000] [--events 7500] [--bins 5]\n"
+       "                  [--width W --height H] [--baf-us 70000] [--refractory-us US]\n"
+       "                  [--png DIR] [--quiet] IN OUT.h5\n"
+       "Reads IN (any file `yelan info` reads) and writes OUT.h5 atomically: `volumes`\n"
+       "(N x C x H x W float32) and `t` (N int64 us). A volume at T holds the events with t <= T.\n"
+       "--at: absolute times in us, increasing. --fps F: every 1/F s after the first event, up\n"
+       "to the last one. Types: tore (YeLan: C = 2K, pos0..pos{K-1} then neg0..neg{K-1}, 0 =\n"
+       "newest; clamp(1 - ln(1+age)/ln(tau), 0, 0.7)/0.7, tau 5e6 us), tore-baldwin (the\n"
+       "original log-age scaling), count (DHP19-normalised counts of the last --window-us, or\n"
+       "of the last --events N), voxel (--bins over the last --window-us, polarity split\n"
+       "linearly in time), surface (exp(-age/tau) per polarity, tau 50000 us).\n"
+       "--baf-us / --refractory-us filter the events first. --png DIR: one picture per volume\n"
+       "(TORE/surface: ON newest slot red, OFF blue; count grey; voxel newest bin +red/-blue).\n",
+       cmd_repr, "representations (issue 5)"},
       {"record", "record a live camera to a file",
        "usage: yelan record [--duration 10s] [--camera SERIAL] OUT.aedat4|OUT.txt|OUT.yelan.h5\n"
        "Records the first attached DAVIS346 (or the one with SERIAL) until --duration has\n"

@@ -15,4 +15,7 @@ int cmd_record(const std::vector<std::string>& args, std::ostream& out, std::ost
 int cmd_info(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int cmd_convert(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// engine/cli/cmd_repr.cpp: representation volumes from event files (camera/repr).
+int cmd_repr(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace yelan::cli

@@ -87,10 +87,11 @@ TEST_CASE("TORE read-out: ages at or past tau, and events newer than T, read 0",
   ToreVolume tore(1, 1, ToreOptions{2, 1000});  // K = 2, tau = 1000 us
   tore.update(Event{5000, 0, 0, 1});
   tore.update(Event{6000, 0, 0, 1});
-  auto v = read(tore, 6999);  // ages 999 and 1999
-  CHECK(v[0] > 0.f);
-  CHECK(v[0] < 1e-3f);
+  auto v = read(tore, 6998);  // ages 998 and 1998: (1 - ln(999)/ln(1000)) / 0.7 = 2.07e-4
+  CHECK(v[0] == Approx((1 - std::log(999.0) / std::log(1000.0)) / 0.7).margin(2e-6));
+  CHECK(v[0] > 1e-4f);
   CHECK(v[1] == 0.f);
+  CHECK(read(tore, 6999)[0] == Approx(0.0).margin(2e-6));  // age 999: ln(1 + 999) = ln(tau)
   v = read(tore, 7000);  // age == tau
   CHECK(v[0] == 0.f);
   // T before the newest event: slot 0 has not arrived and reads 0; slot 1 (age 500) does not move up
