@@ -6,38 +6,51 @@
 constexpr int NQ = 16 / VL;
 constexpr std::size_t kChunk = 256;
 
-// Per-lane double accumulation of f(pixel vector q) over the planes of channel block b.
+// Per-lane double accumulation, over the planes of channel block b, of the two values
+// f(i, q, &a, &b) yields for each pixel vector (one pass over memory for both sums).
 template <class F>
-void lane_sums(const BnShape& s, int b, F&& f, double* out /* 16 */) {
-  for (int l = 0; l < 16; ++l) out[l] = 0;
+void lane_sums2(const BnShape& s, int b, F&& f, double* out_a, double* out_b) {
+  for (int l = 0; l < 16; ++l) out_a[l] = out_b[l] = 0;
   for (int n = 0; n < s.n; ++n) {
     const std::size_t base = (std::size_t(n) * s.cb + b) * s.pixels * 16;
     for (std::size_t p0 = 0; p0 < s.pixels; p0 += kChunk) {
       const std::size_t p1 = std::min(s.pixels, p0 + kChunk);
-      vf acc[NQ] = {};
+      vf acc_a[NQ] = {}, acc_b[NQ] = {};
       for (std::size_t p = p0; p < p1; ++p)
-        for (int q = 0; q < NQ; ++q) acc[q] += f(base + p * 16 + q * VL, q);
+        for (int q = 0; q < NQ; ++q) f(base + p * 16 + q * VL, q, acc_a[q], acc_b[q]);
       for (int q = 0; q < NQ; ++q)
-        for (int l = 0; l < VL; ++l) out[q * VL + l] += acc[q][l];
+        for (int l = 0; l < VL; ++l) {
+          out_a[q * VL + l] += acc_a[q][l];
+          out_b[q * VL + l] += acc_b[q][l];
+        }
     }
   }
 }
 
+template <class F>
+void lane_sums(const BnShape& s, int b, F&& f, double* out) {
+  double unused[16];
+  lane_sums2(s, b, [&](std::size_t i, int q, vf& a, vf&) { a += f(i, q); }, out, unused);
+}
+
+// One pass: sums of (x - k) and (x - k)^2 with k the first pixel of each lane, a shift that
+// keeps the variance free of the cancellation a plain sum of squares would suffer.
 void simd_stats(const BnShape& s, const float* x, float* mean, float* var) {
   const double m = double(s.n) * s.pixels;
 #pragma omp parallel for schedule(static)
   for (int b = 0; b < s.cb; ++b) {
-    double sum[16], sq[16];
-    lane_sums(s, b, [&](std::size_t i, int) { return loadf(x + i); }, sum);
-    float mu[16];
-    for (int l = 0; l < 16; ++l) mu[l] = float(sum[l] / m);
-    lane_sums(s, b, [&](std::size_t i, int q) {
-      const vf d = loadf(x + i) - loadf(mu + q * VL);
-      return d * d;
-    }, sq);
+    float k[16];
+    for (int l = 0; l < 16; ++l) k[l] = x[std::size_t(b) * s.pixels * 16 + l];
+    double s1[16], s2[16];
+    lane_sums2(s, b, [&](std::size_t i, int q, vf& a, vf& sq) {
+      const vf d = loadf(x + i) - loadf(k + q * VL);
+      a += d;
+      sq += d * d;
+    }, s1, s2);
     for (int l = 0; l < 16; ++l) {
-      mean[b * 16 + l] = mu[l];
-      var[b * 16 + l] = float(sq[l] / m);
+      const double d = s1[l] / m;
+      mean[b * 16 + l] = float(k[l] + d);
+      var[b * 16 + l] = float(std::max(0.0, s2[l] / m - d * d));
     }
   }
 }
@@ -89,10 +102,11 @@ void simd_bwd(const BnShape& s, const float* x, const float* y, const float* dy,
       return relu ? select(loadf(y + i) > vf{}, g, vf{}) : g;
     };
     double db[16], dg[16];
-    lane_sums(s, b, [&](std::size_t i, int) { return grad(i); }, db);
-    lane_sums(s, b, [&](std::size_t i, int q) {
-      return grad(i) * ((loadf(x + i) - loadf(mu + q * VL)) * loadf(inv + q * VL));
-    }, dg);
+    lane_sums2(s, b, [&](std::size_t i, int q, vf& sb, vf& sg) {
+      const vf g = grad(i);
+      sb += g;
+      sg += g * ((loadf(x + i) - loadf(mu + q * VL)) * loadf(inv + q * VL));
+    }, db, dg);
     // dx = gamma * inv * (g - db/m - xhat * dg/m)
     float k1[16], k2[16], k3[16];
     for (int l = 0; l < 16; ++l) {

@@ -23,7 +23,7 @@ void simd_max_fwd(const PoolShape& s, const float* x, float* y, std::int32_t* ar
               at = (better & (vi{} + (ih * s.iw + iw))) | (~better & at);
             }
           storef(y + o + q * VL, best);
-          for (int l = 0; l < VL; ++l) arg[o + q * VL + l] = at[l];
+          __builtin_memcpy(arg + o + q * VL, &at, sizeof at);  // one vector store
         }
       }
     }

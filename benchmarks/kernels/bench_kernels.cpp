@@ -10,6 +10,8 @@
 #include <random>
 #include <sstream>
 
+#include "benchmarks/kernels/bench_memory.h"
+#include "benchmarks/kernels/record.h"
 #include "benchmarks/kernels/chart.h"
 #include "benchmarks/kernels/onednn_reference.h"
 #include "benchmarks/kernels/shapes.h"
@@ -25,27 +27,6 @@ namespace yelan::bench {
 namespace {
 
 using kernels::Isa;
-
-struct Record {
-  std::string where, op, algo = "direct";
-  int kh, kw, stride, cin, cout, h, w;
-  std::string isa;
-  int threads;
-  double ms, gflops, peak_gflops, pct_peak;
-  double torch_gflops = 0;   // 0: not measured
-  double onednn_gflops = 0;
-};
-
-struct Buffer {
-  AlignedPtr mem;
-  float* p;
-  explicit Buffer(std::size_t n, unsigned seed) : mem(aligned_alloc_bytes(n * sizeof(float))) {
-    p = static_cast<float*>(mem.get());
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> u(-1.f, 1.f);
-    for (std::size_t i = 0; i < n; ++i) p[i] = u(rng);
-  }
-};
 
 double measure_peak_gflops(Isa isa, int threads, int reps) {
   const kernels::PeakKernels& k = kernels::peak_kernels(isa);
@@ -109,6 +90,8 @@ void print_json(std::ostream& out, const std::vector<Record>& recs) {
         << ", \"pct_peak\": " << r.pct_peak;
     if (r.torch_gflops > 0) out << ", \"torch_gflops\": " << r.torch_gflops;
     if (r.onednn_gflops > 0) out << ", \"onednn_gflops\": " << r.onednn_gflops;
+    if (r.bytes > 0)
+      out << ", \"bytes\": " << r.bytes << ", \"memcpy_ms\": " << r.memcpy_ms << ", \"vs_memcpy\": " << r.ms / r.memcpy_ms;
     out << "}" << (i + 1 < recs.size() ? "," : "") << "\n";
   }
   out << "]\n";
@@ -187,13 +170,15 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
           err << "  " << r.where << " " << r.op << ": " << std::setprecision(3) << r.ms << " ms\n";
         }
       }
+      if (!quick && (only.empty() || only == "convlstm.step")) bench_convlstm_step(isa, t, reps, recs, err);
+      if (!quick && (only.empty() || only == "memory")) bench_memory_bound(isa, t, reps, recs, err);
       // The host is shared: take the better of the peaks measured before and after.
       const double peak = std::max(peak_before, measure_peak_gflops(isa, t, reps));
       err << "peak " << kernels::isa_name(isa) << " x" << t << " thread(s): " << std::fixed << std::setprecision(1)
           << peak << " GFLOP/s\n";
       for (std::size_t i = first; i < recs.size(); ++i) {
         recs[i].peak_gflops = peak;
-        recs[i].pct_peak = 100.0 * recs[i].gflops / peak;
+        recs[i].pct_peak = 100.0 * recs[i].gflops / peak;  // 0 for memory-bound records
       }
     }
   }
@@ -217,6 +202,11 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
                     r.where.c_str(), r.op.c_str(), r.kh, r.kw, r.stride, r.cin, r.cout, r.h, r.w, r.isa.c_str(),
                     r.threads, r.ms, r.gflops, r.pct_peak);
       out << line;
+      if (r.bytes > 0) {
+        std::snprintf(line, sizeof line, "  %.2fx memcpy (%.1f GB/s)\n", r.ms / r.memcpy_ms, r.bytes / r.ms / 1e6);
+        out << line;
+        continue;
+      }
       for (double ref : {r.onednn_gflops, r.torch_gflops}) {
         if (ref > 0) std::snprintf(line, sizeof line, "  %6.1f %8.2fx", ref, r.gflops / ref);
         else std::snprintf(line, sizeof line, "  %6s %9s", "-", "-");
