@@ -61,17 +61,11 @@ DavisDevice::DavisDevice(Transport& transport, Sleep sleep)
 DavisDevice::~DavisDevice() { stop(); }
 
 void DavisDevice::config_set(std::uint8_t module, std::uint8_t param, std::uint32_t value) {
-  const std::uint8_t be[4] = {std::uint8_t(value >> 24), std::uint8_t(value >> 16),
-                              std::uint8_t(value >> 8), std::uint8_t(value)};
-  transport_.control_out(kRequestConfig, module, param, be);
+  config_write(transport_, module, param, value);
 }
 
 std::uint32_t DavisDevice::config_get(std::uint8_t module, std::uint8_t param) {
-  const std::vector<std::uint8_t> be = transport_.control_in(kRequestConfig, module, param, 4);
-  if (be.size() != 4)
-    throw UsbError("config read of module " + std::to_string(module) + " parameter " +
-                   std::to_string(param) + " returned " + std::to_string(be.size()) + " bytes, expected 4");
-  return (std::uint32_t(be[0]) << 24) | (std::uint32_t(be[1]) << 16) | (std::uint32_t(be[2]) << 8) | be[3];
+  return config_read(transport_, module, param);
 }
 
 const DavisInfo& DavisDevice::open() {
@@ -101,9 +95,8 @@ void DavisDevice::configure(const DavisConfig& config) {
   config_ = config;
   for (const BiasWord& b : davis346_biases()) config_set(module::chip, b.address, b.value);
   for (const BiasWord& b : davis346_chip_register()) config_set(module::chip, b.address, b.value);
-  // Multiplexer: no timestamp reset request; when USB stalls, drop DVS and external-input
-  // events rather than back-pressuring the sensor.
-  config_set(module::mux, mux::timestamp_reset, 0);
+  // Multiplexer: when USB stalls, drop DVS and external-input events rather than
+  // back-pressuring the sensor.
   config_set(module::mux, mux::drop_extinput_on_stall, 1);
   config_set(module::mux, mux::drop_dvs_on_stall, 1);
   config_set(module::dvs, dvs::wait_on_stall, 0);

@@ -8,8 +8,8 @@
 #include <span>
 #include <string>
 
+#include "camera/usb/camera_device.h"
 #include "camera/usb/davis_decoder.h"
-#include "camera/usb/transport.h"
 
 namespace yelan::camera::usb {
 
@@ -26,14 +26,13 @@ struct DavisConfig {
   int early_packet_delay_us = 1000;  // the device ships a short USB packet after this long
 };
 
-class DavisDevice {
+class DavisDevice final : public CameraDevice {
  public:
-  using EventSink = std::function<void(std::span<const Event>)>;
   using Sleep = std::function<void(std::chrono::milliseconds)>;
 
   // `sleep` waits between start-up steps (bias settling); tests pass a no-op.
   explicit DavisDevice(Transport& transport, Sleep sleep = {});
-  ~DavisDevice();
+  ~DavisDevice() override;
   DavisDevice(const DavisDevice&) = delete;
   DavisDevice& operator=(const DavisDevice&) = delete;
 
@@ -46,14 +45,14 @@ class DavisDevice {
   const DavisInfo& open();
   const DavisInfo& info() const { return info_; }
   void configure(const DavisConfig& config = {});
-  // Starts streaming; decoded events go to `sink` from inside Transport::poll().
-  void start(EventSink sink);
-  // Stops the modules (skipped when the device is gone) and the transfers. Never throws.
-  void stop() noexcept;
+  void start(EventSink sink) override;
+  void stop() noexcept override;
 
   StreamState state() const { return transport_.state(); }
-  const std::string& error() const { return error_; }
-  const DecoderStats& stats() const { return decoder_.stats(); }
+  const std::string& error() const override { return error_; }
+  const DecoderStats& stats() const override { return decoder_.stats(); }
+  std::uint16_t width() const override { return info_.width; }
+  std::uint16_t height() const override { return info_.height; }
 
  private:
   void stop_modules();

@@ -4,8 +4,13 @@
 
 namespace yelan::camera::usb {
 
-void FakeTransport::set_config(std::uint8_t module, std::uint8_t param, std::uint32_t value) {
+void FakeTransport::set_config(std::uint16_t module, std::uint16_t param, std::uint32_t value) {
   config_[{module, param}] = value;
+}
+
+std::uint32_t FakeTransport::config(std::uint16_t module, std::uint16_t param) const {
+  auto it = config_.find({module, param});
+  return it == config_.end() ? 0 : it->second;
 }
 
 void FakeTransport::queue_buffer(std::vector<std::uint8_t> bytes) { queue_.push_back(std::move(bytes)); }
@@ -15,6 +20,9 @@ void FakeTransport::control_out(std::uint8_t request, std::uint16_t value, std::
   if (controls_fail_ || state_ == StreamState::disconnected)
     throw UsbError("control transfer failed: device disconnected");
   controls_.push_back({true, request, value, index, {data.begin(), data.end()}});
+  if (request == kRequestConfig && data.size() == 4)
+    config_[{value, index}] = (std::uint32_t(data[0]) << 24) | (std::uint32_t(data[1]) << 16) |
+                              (std::uint32_t(data[2]) << 8) | data[3];
 }
 
 std::vector<std::uint8_t> FakeTransport::control_in(std::uint8_t request, std::uint16_t value,
@@ -23,8 +31,7 @@ std::vector<std::uint8_t> FakeTransport::control_in(std::uint8_t request, std::u
     throw UsbError("control transfer failed: device disconnected");
   std::vector<std::uint8_t> out(length, 0);
   if (request == kRequestConfig && length == 4) {
-    auto it = config_.find({static_cast<std::uint8_t>(value), static_cast<std::uint8_t>(index)});
-    const std::uint32_t v = it == config_.end() ? 0 : it->second;
+    const std::uint32_t v = config(value, index);
     out = {std::uint8_t(v >> 24), std::uint8_t(v >> 16), std::uint8_t(v >> 8), std::uint8_t(v)};
   }
   controls_.push_back({false, request, value, index, out});

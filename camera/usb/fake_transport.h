@@ -1,9 +1,9 @@
-// A scripted Transport for tests: records every control transfer, answers control reads
-// from a table, and replays bulk buffers one per poll(), optionally followed by an unplug.
+// A scripted Transport for tests: records every control transfer, keeps config writes in a
+// register table that config reads answer from (like the FPGA and sensor registers), and
+// replays bulk buffers one per poll(), optionally followed by an unplug.
 #pragma once
 #include <deque>
 #include <map>
-#include <tuple>
 
 #include "camera/usb/transport.h"
 
@@ -18,8 +18,9 @@ struct ControlRecord {
 
 class FakeTransport final : public Transport {
  public:
-  // Value a config read (module, parameter) returns; unset reads return 0.
-  void set_config(std::uint8_t module, std::uint8_t param, std::uint32_t value);
+  // Value a config read (module, parameter) returns until written; unset registers read 0.
+  void set_config(std::uint16_t module, std::uint16_t param, std::uint32_t value);
+  std::uint32_t config(std::uint16_t module, std::uint16_t param) const;
   // Queues one bulk buffer; poll() delivers them in order, one per call.
   void queue_buffer(std::vector<std::uint8_t> bytes);
   // After the queued buffers, report the device as unplugged (LIBUSB_TRANSFER_NO_DEVICE).
@@ -44,7 +45,7 @@ class FakeTransport final : public Transport {
   StreamState state() const override { return state_; }
 
  private:
-  std::map<std::pair<std::uint8_t, std::uint8_t>, std::uint32_t> config_;
+  std::map<std::pair<std::uint16_t, std::uint16_t>, std::uint32_t> config_;
   std::deque<std::vector<std::uint8_t>> queue_;
   std::vector<ControlRecord> controls_;
   DataCallback on_data_;

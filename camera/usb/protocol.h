@@ -100,3 +100,47 @@ constexpr std::uint32_t shifted_source_bias(unsigned ref, unsigned reg, unsigned
 }
 
 }  // namespace yelan::camera::usb
+
+namespace yelan::camera::usb {
+
+// DVXplorer: the FPGA modules MUX, DVS, IMU, external input, SYSINFO and USB sit at the
+// same addresses with the same parameters as on DAVIS. The Samsung sensor's own 8-bit
+// registers are reached through module 5 with the 16-bit register address as parameter.
+namespace dvx {
+inline constexpr std::uint8_t sensor_module = 5;
+inline constexpr std::uint32_t chip_dvxplorer = 20, chip_dvxplorer_lite = 19;  // 640x480, 320x240
+// Sensor register addresses.
+inline constexpr std::uint16_t bias_range_log_sf_on_rst = 0x000B, bias_range_loga_logd = 0x000C,
+                               bias_otp_trim = 0x000D, bias_pins_dbgp = 0x000F, bias_pins_dbgn = 0x0010,
+                               bias_level_sf_off = 0x0012, bias_pins_bufp = 0x0013,
+                               bias_pins_bufn = 0x0014, bias_pins_dob = 0x0015, bias_amp = 0x0018,
+                               bias_on = 0x001C, bias_off = 0x001E;
+inline constexpr std::uint16_t control_mode = 0x3000, clock_divider_sys = 0x3011,
+                               parallel_out_control = 0x3019, parallel_out_enable = 0x301E,
+                               packet_format = 0x3067;
+inline constexpr std::uint16_t digital_enable = 0x3200, digital_restart = 0x3201,
+                               dual_binning = 0x3202, subsample_ratio = 0x3204, area_block = 0x3205,
+                               timestamp_subunit = 0x3234, timestamp_reset = 0x3238,
+                               timing_first_selx_start = 0x323C, timing_gh_count = 0x3240,
+                               timing_gh_count_fine = 0x3243, timing_grs_count = 0x3244,
+                               timing_grs_count_fine = 0x3247, global_reset_readout = 0x3248,
+                               timing_next_gh_cnt = 0x324B, timing_selx_width = 0x324C,
+                               timing_ay_start = 0x324E, timing_ay_end = 0x324F,
+                               timing_max_event_num = 0x3251, timing_r_start = 0x3253,
+                               timing_r_end = 0x3254, mode_control = 0x3255, timing_grs_end = 0x3256,
+                               timing_grs_end_fine = 0x3259, fixed_read_time = 0x325C,
+                               timing_read_time_interval = 0x325D, external_trigger = 0x3260,
+                               timing_next_selx_start = 0x3261, boot_sequence = 0x3266;
+inline constexpr std::uint16_t cropper_bypass = 0x3300, cropper_y_start_group = 0x3301,
+                               cropper_y_start_mask = 0x3302, cropper_y_end_group = 0x3303,
+                               cropper_y_end_mask = 0x3304, cropper_x_start = 0x3305,
+                               cropper_x_end = 0x3307;
+inline constexpr std::uint16_t activity_bypass = 0x3500, activity_pos_threshold = 0x3501,
+                               activity_neg_threshold = 0x3503, activity_dec_rate = 0x3505,
+                               activity_dec_time = 0x3506, activity_pos_max_count = 0x3513;
+inline constexpr std::uint16_t spatial_histogram_off = 0x3600;
+// control_mode values.
+inline constexpr std::uint32_t mode_off = 0, mode_stream = 2;
+}  // namespace dvx
+
+}  // namespace yelan::camera::usb

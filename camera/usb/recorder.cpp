@@ -2,7 +2,7 @@
 
 namespace yelan::camera::usb {
 
-RecordResult record(DavisDevice& device, Transport& transport, EventWriter& writer,
+RecordResult record(CameraDevice& device, Transport& transport, EventWriter& writer,
                     const std::function<bool()>& keep_going) {
   RecordResult result;
   device.start([&](std::span<const Event> batch) {

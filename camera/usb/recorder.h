@@ -6,7 +6,7 @@
 #include <string>
 
 #include "camera/io/event_writer.h"
-#include "camera/usb/davis_device.h"
+#include "camera/usb/camera_device.h"
 
 namespace yelan::camera::usb {
 
@@ -17,10 +17,11 @@ struct RecordResult {
   DecoderStats stats;
 };
 
-// `device` must be open and configured. `keep_going` is asked between polls; the loop also
-// ends when the transport reports a disconnect or failure. The writer is closed (renamed
-// into place) in every case; exceptions from the writer propagate after stopping the device.
-RecordResult record(DavisDevice& device, Transport& transport, EventWriter& writer,
+// `device` (DavisDevice or DvxplorerDevice) must be open and configured. `keep_going` is
+// asked between polls; the loop also ends when the transport reports a disconnect or a
+// failure. The writer is closed (renamed into place) in every case; exceptions from the
+// writer propagate after stopping the device.
+RecordResult record(CameraDevice& device, Transport& transport, EventWriter& writer,
                     const std::function<bool()>& keep_going);
 
 }  // namespace yelan::camera::usb

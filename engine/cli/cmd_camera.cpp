@@ -8,6 +8,7 @@
 
 #include "camera/io/event_writer.h"
 #include "camera/usb/davis_device.h"
+#include "camera/usb/dvxplorer_device.h"
 #include "camera/usb/libusb_transport.h"
 #include "camera/usb/protocol.h"
 #include "camera/usb/recorder.h"
@@ -108,19 +109,26 @@ int cmd_record(const std::vector<std::string>& args, std::ostream& out, std::ost
     }
     if (!chosen) throw std::runtime_error("no camera with serial '" + *serial + "' (attached: " + seen + ")");
   }
-  if (chosen->model != usb::Model::davis346)
-    throw std::runtime_error(std::string(usb::model_name(chosen->model)) +
-                             " recording is not implemented: its event decoder is, but not its sensor "
-                             "start-up sequence (camera/usb/README.md)");
-
   usb::LibusbTransport transport(*chosen);
-  usb::DavisDevice device(transport);
-  const usb::DavisInfo& info = device.open();
-  device.configure();
+  std::unique_ptr<usb::CameraDevice> device;
+  std::string chip;
+  if (chosen->model == usb::Model::davis346) {
+    auto davis = std::make_unique<usb::DavisDevice>(transport);
+    const usb::DavisInfo& info = davis->open();
+    davis->configure();
+    chip = "chip " + std::to_string(info.chip_id) + ", logic revision " + std::to_string(info.logic_version);
+    device = std::move(davis);
+  } else {
+    auto dvx = std::make_unique<usb::DvxplorerDevice>(transport);
+    const usb::DvxplorerInfo& info = dvx->open();
+    dvx->configure();
+    chip = "chip " + std::to_string(info.chip_id) + ", logic revision " + std::to_string(info.logic_version);
+    device = std::move(dvx);
+  }
   camera::StreamInfo stream;
   stream.format = camera::writer_format_for(path);
-  stream.width = info.width;
-  stream.height = info.height;
+  stream.width = device->width();
+  stream.height = device->height();
   std::unique_ptr<camera::EventWriter> writer = camera::open_event_writer(path, stream);
 
   InterruptGuard guard;
@@ -130,13 +138,13 @@ int cmd_record(const std::vector<std::string>& args, std::ostream& out, std::ost
     if (duration == std::chrono::milliseconds::max()) return true;
     return std::chrono::steady_clock::now() - start < duration;
   };
-  const usb::RecordResult r = usb::record(device, transport, *writer, keep_going);
+  const usb::RecordResult r = usb::record(*device, transport, *writer, keep_going);
 
   out << "recorded " << r.events << " events";
   if (r.events > 0) out << " (t " << r.t_first << " .. " << r.t_last << " us)";
   out << " from " << describe(*chosen) << " to " << path << (g_interrupted ? " (interrupted)" : "") << "\n";
-  out << "camera: chip " << info.chip_id << ", logic revision " << info.logic_version << ", " << info.width << "x"
-      << info.height << "; decoder: " << r.stats.summary() << "\n";
+  out << "camera: " << chip << ", " << device->width() << "x" << device->height() << "; decoder: " << r.stats.summary()
+      << "\n";
   if (!r.error.empty()) {
     err << "yelan record: the camera stream ended early: " << r.error << "; the " << r.events
         << " events decoded before are in " << path << "\n";

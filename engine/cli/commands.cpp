@@ -49,7 +49,7 @@ const std::vector<Command>& commands() {
        cmd_repr, "representations (issue 5)"},
       {"record", "record a live camera to a file",
        "usage: yelan record [--duration 10s] [--camera SERIAL] OUT.aedat4|OUT.txt|OUT.yelan.h5\n"
-       "Records the first attached DAVIS346 (or the one with SERIAL) until --duration has\n"
+       "Records the first attached DAVIS346/DVXplorer (or the one with SERIAL) until --duration has\n"
        "passed (10s, 500ms, 2m; default: until Ctrl-C). Ctrl-C stops cleanly; the file is\n"
        "written atomically and keeps every event decoded before an unplug (exit 1 then).\n",
        cmd_record, "the libusb driver (issue 5)"},

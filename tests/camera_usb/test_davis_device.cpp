@@ -103,7 +103,7 @@ TEST_CASE("device: configure sends DAVIS346 biases, chip register and FPGA defau
   const std::size_t before = t.controls().size();
   d.configure();
   const auto w = writes(t, before);
-  REQUIRE(w.size() == 28 + 15 + 5 + 1);
+  REQUIRE(w.size() == 28 + 15 + 4 + 1);
   // Hand-packed bias words: VDAC(27,6) = 27 | 6<<6; N(5,255) = 0xF | 255<<4 | 5<<12;
   // P(2,58) = 0xD | 58<<4 | 2<<12; pad follower N(7,215) disabled = 0xE | 215<<4 | 7<<12;
   // shifted source (1,33) = 1<<4 | 33<<10.
@@ -117,12 +117,11 @@ TEST_CASE("device: configure sends DAVIS346 biases, chip register and FPGA defau
   CHECK(w[28] == Write{5, 128, 0});          // chip register starts at 128
   CHECK(w[41] == Write{5, 143, 1});          // on-chip gray counter
   CHECK(w[42] == Write{5, 144, 0});          // ADC reads pixels
-  CHECK(w[43] == Write{0, 2, 0});            // no timestamp reset
-  CHECK(w[44] == Write{0, 4, 1});            // drop external input on USB stall
-  CHECK(w[45] == Write{0, 5, 1});            // drop DVS on USB stall
-  CHECK(w[46] == Write{1, 4, 0});
-  CHECK(w[47] == Write{1, 5, 0});
-  CHECK(w[48] == Write{9, 1, 80000});        // 1 ms at 80 MHz
+  CHECK(w[43] == Write{0, 4, 1});            // drop external input on USB stall
+  CHECK(w[44] == Write{0, 5, 1});            // drop DVS on USB stall
+  CHECK(w[45] == Write{1, 4, 0});
+  CHECK(w[46] == Write{1, 5, 0});
+  CHECK(w[47] == Write{9, 1, 80000});        // 1 ms at 80 MHz
   for (const Write& x : w) {
     CHECK_FALSE((std::get<0>(x) == 2 && std::get<1>(x) == 4 && std::get<2>(x) != 0));  // APS run
     CHECK_FALSE((std::get<0>(x) == 3 && std::get<2>(x) != 0));                         // IMU
