@@ -47,15 +47,17 @@ void scatter_planes(const float* buf, int n, int channels, std::size_t plane, fl
 
 // Runs `kernel` over the FIFO in row chunks that fit a stack buffer and scatters each
 // chunk from the FIFO's pixel-major order to the output's channel-major planes.
+// Rows are independent, so `threads` > 1 splits them with OpenMP.
 template <class Kernel>
 void readout_planes(const std::vector<std::int64_t>& fifo, int width, int height, int k,
-                    const ToreReadoutParams& params, Kernel kernel, float* out) {
+                    const ToreReadoutParams& params, Kernel kernel, float* out, int threads) {
   constexpr int kBuffer = 1536;
   const int channels = 2 * k;
   const int chunk = std::max(1, kBuffer / channels);
   const std::size_t plane = std::size_t(width) * height;
-  float buf[kBuffer];
+#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
   for (int y = 0; y < height; ++y) {
+    float buf[kBuffer];
     for (int x0 = 0; x0 < width; x0 += chunk) {
       const int n = std::min(chunk, width - x0);
       kernel(fifo.data() + (std::size_t(y) * width + x0) * channels, std::size_t(n) * channels,
@@ -96,20 +98,22 @@ void ToreVolume::update(std::span<const Event> events) {
   }
 }
 
-void ToreVolume::readout(std::int64_t t_us, float* out) const {
+void ToreVolume::readout(std::int64_t t_us, float* out, int threads) const {
   const float ln_tau = static_cast<float>(std::log(static_cast<double>(tau_)));
   // clamp(1 - ln(1 + a) / ln(tau), 0, 0.7) / 0.7 == clamp(1/0.7 - ln(1 + a) / (0.7 ln(tau)), 0, 1)
   const ToreReadoutParams p{t_us, static_cast<std::uint64_t>(tau_), 1.f / 0.7f, 1.f / (0.7f * ln_tau)};
-  readout_planes(fifo_, width_, height_, k_, p, tore_kernels(kernels::active_isa()).yelan, out);
+  readout_planes(fifo_, width_, height_, k_, p, tore_kernels(kernels::active_isa()).yelan, out,
+                 std::max(threads, 1));
 }
 
-void ToreVolume::readout_baldwin(std::int64_t t_us, float* out, BaldwinScale scale) const {
+void ToreVolume::readout_baldwin(std::int64_t t_us, float* out, BaldwinScale scale, int threads) const {
   if (scale.min_t_us < 0 || scale.max_t_us <= scale.min_t_us || scale.max_t_us > kMaxHorizon)
     throw std::invalid_argument("TORE (Baldwin): need 0 <= min_t < max_t <= 2^31-1 us, got " +
                                 std::to_string(scale.min_t_us) + ", " + std::to_string(scale.max_t_us));
   const ToreReadoutParams p{t_us, static_cast<std::uint64_t>(scale.max_t_us),
                             static_cast<float>(std::log1p(static_cast<double>(scale.min_t_us))), 1.f};
-  readout_planes(fifo_, width_, height_, k_, p, tore_kernels(kernels::active_isa()).baldwin, out);
+  readout_planes(fifo_, width_, height_, k_, p, tore_kernels(kernels::active_isa()).baldwin, out,
+                 std::max(threads, 1));
 }
 
 }  // namespace yelan::camera

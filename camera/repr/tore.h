@@ -69,8 +69,9 @@ class ToreVolume {
   void update(std::span<const Event> events);  // same, with K specialised
 
   // Writes volume_size() floats. See the header comment for the two definitions.
-  void readout(std::int64_t t_us, float* out) const;
-  void readout_baldwin(std::int64_t t_us, float* out, BaldwinScale scale = {}) const;
+  // threads > 1 splits the rows over that many OpenMP threads (1: the calling thread only).
+  void readout(std::int64_t t_us, float* out, int threads = 1) const;
+  void readout_baldwin(std::int64_t t_us, float* out, BaldwinScale scale = {}, int threads = 1) const;
 
   // Raw timestamp of slot k (0 = newest) of a pixel; polarity 1 = ON. kEmpty if none.
   std::int64_t slot(int x, int y, int polarity, int k) const {

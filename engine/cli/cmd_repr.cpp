@@ -18,6 +18,7 @@
 #include "camera/repr/volume_file.h"
 #include "engine/cli/args.h"
 #include "engine/cli/handlers.h"
+#include "engine/threads.h"
 
 namespace yelan::cli {
 namespace {
@@ -66,7 +67,7 @@ class ToreRepr : public Representation {
   int channels() const override { return tore_.channels(); }
   void push(std::span<const Event> ev) override { tore_.update(ev); }
   void readout(std::int64_t t, float* out) override {
-    baldwin_ ? tore_.readout_baldwin(t, out) : tore_.readout(t, out);
+    baldwin_ ? tore_.readout_baldwin(t, out, {}, threads()) : tore_.readout(t, out, threads());
   }
   std::vector<std::uint8_t> preview(const float* v, int w, int h) const override {
     // Baldwin's values run from 0 (new) to ~10.4 (old or missing): show the newest as bright.
@@ -302,6 +303,8 @@ int run_repr(const std::vector<std::string>& argv, std::ostream& out) {
       const auto& w = reader->warnings();
       out << "yelan repr: " << writer.count() << " volume(s) of " << repr->channels() << "x" << height << "x"
           << width << " (" << type << ") from " << events << " events of " << in << " -> " << out_path << "\n";
+      if (writer.count() == 0)
+        out << "  no read-out time fell within the events (" << (schedule->by_rate() ? "--fps" : "--at") << ")\n";
       if (filters.removed) out << "  filters removed " << filters.removed << " events\n";
       if (w.total()) out << "  reader warnings: " << w.backwards << " backwards, " << w.out_of_range
                          << " out of range, " << w.skipped << " skipped (first: " << w.first << ")\n";

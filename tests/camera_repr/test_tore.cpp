@@ -147,8 +147,8 @@ TEST_CASE("TORE batch update equals per-event update for every K, and ISAs agree
     for (auto isa : yelan::test::supported_isas()) {
       INFO(yelan::kernels::isa_name(isa));
       yelan::kernels::set_isa(isa);
-      batch.readout(190'000, got.data());
-      batch.readout_baldwin(190'000, got_b.data());
+      batch.readout(190'000, got.data(), 3);  // rows over 3 threads
+      batch.readout_baldwin(190'000, got_b.data(), {}, 3);
       for (std::size_t i = 0; i < ref.size(); ++i) {
         REQUIRE(got[i] == Approx(ref[i]).margin(1e-6));
         REQUIRE(got_b[i] == Approx(ref_b[i]).margin(4e-6));
