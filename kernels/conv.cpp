@@ -48,6 +48,30 @@ void unpack_conv_weights(const ConvShape& s, const float* p, float* w) {
         }
 }
 
+bool winograd_applicable(const ConvShape& s) { return s.valid() && s.kh == 3 && s.kw == 3 && s.stride == 1; }
+
+std::size_t winograd_weight_floats(const ConvShape& s) { return 36 * std::size_t(s.ocb()) * s.icb() * kBlock * kBlock; }
+
+void pack_winograd_weights(const ConvShape& s, const float* w, float* out) {
+  static const double G[6][3] = {{1.0 / 4, 0, 0},           {-1.0 / 6, -1.0 / 6, -1.0 / 6}, {-1.0 / 6, 1.0 / 6, -1.0 / 6},
+                                 {1.0 / 24, 1.0 / 12, 1.0 / 6}, {1.0 / 24, -1.0 / 12, 1.0 / 6}, {0, 0, 1}};
+  std::memset(out, 0, winograd_weight_floats(s) * sizeof(float));
+  const int OCB = s.ocb(), ICB = s.icb();
+  for (int o = 0; o < s.oc; ++o)
+    for (int i = 0; i < s.ic; ++i) {
+      const float* g = w + (std::size_t(o) * s.ic + i) * 9;
+      double gg[6][3];  // G g
+      for (int a = 0; a < 6; ++a)
+        for (int c = 0; c < 3; ++c) gg[a][c] = G[a][0] * g[c] + G[a][1] * g[3 + c] + G[a][2] * g[6 + c];
+      for (int a = 0; a < 6; ++a)
+        for (int b = 0; b < 6; ++b) {
+          const double u = gg[a][0] * G[b][0] + gg[a][1] * G[b][1] + gg[a][2] * G[b][2];  // (G g) G^T
+          out[((((std::size_t(a * 6 + b) * OCB + o / kBlock) * ICB + i / kBlock) * kBlock + i % kBlock) * kBlock) +
+              o % kBlock] = float(u);
+        }
+    }
+}
+
 namespace {
 
 // Plain loops over the blocked layout: the reference the SIMD variants are tested against.
@@ -138,6 +162,54 @@ void bwd_weights_scalar(const ConvShape& s, const float* x, const float* dy, flo
         }
 }
 
+// Winograd by the textbook, one output channel and one tile at a time (the reference the
+// SIMD variants are checked against, besides the direct convolution).
+void fwd_winograd_scalar(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
+  static const float BT[6][6] = {{4, 0, -5, 0, 1, 0},  {0, -4, -4, 1, 1, 0}, {0, 4, -4, -1, 1, 0},
+                                 {0, -2, -1, 2, 1, 0}, {0, 2, -1, -2, 1, 0}, {0, 4, 0, -5, 0, 1}};
+  static const float AT[4][6] = {{1, 1, 1, 1, 1, 0}, {0, 1, -1, 2, -2, 0}, {0, 1, 1, 4, 4, 0}, {0, 1, -1, 8, -8, 1}};
+  const Blocked b{s};
+  const int OH = s.oh(), OW = s.ow(), OCB = s.ocb(), ICB = s.icb();
+  for (int n = 0; n < s.n; ++n)
+    for (int th = 0; th < OH; th += 4)
+      for (int tw = 0; tw < OW; tw += 4)
+        for (int o = 0; o < s.oc; ++o) {
+          float m[6][6] = {};
+          for (int i = 0; i < s.ic; ++i) {
+            float d[6][6], t[6][6];
+            for (int r = 0; r < 6; ++r)
+              for (int c = 0; c < 6; ++c) {
+                const int ih = th - s.pad_h + r, iw = tw - s.pad_w + c;
+                d[r][c] = ih >= 0 && ih < s.ih && iw >= 0 && iw < s.iw ? x[b.x(n, i, ih, iw)] : 0.f;
+              }
+            for (int r = 0; r < 6; ++r)
+              for (int c = 0; c < 6; ++c) {
+                t[r][c] = 0;
+                for (int k = 0; k < 6; ++k) t[r][c] += BT[r][k] * d[k][c];
+              }
+            for (int r = 0; r < 6; ++r)
+              for (int c = 0; c < 6; ++c) {
+                float v = 0;
+                for (int k = 0; k < 6; ++k) v += t[r][k] * BT[c][k];
+                m[r][c] += v * u[((((std::size_t(r * 6 + c) * OCB + o / kBlock) * ICB + i / kBlock) * kBlock +
+                                   i % kBlock) * kBlock) + o % kBlock];
+              }
+          }
+          for (int r = 0; r < 4 && th + r < OH; ++r)
+            for (int c = 0; c < 4 && tw + c < OW; ++c) {
+              float v = bias ? bias[o] : 0.f;
+              for (int a = 0; a < 6; ++a)
+                for (int k = 0; k < 6; ++k) v += AT[r][a] * m[a][k] * AT[c][k];
+              y[b.y(n, o, th + r, tw + c)] = v;
+            }
+        }
+  // padding lanes of y stay zero
+  for (int n = 0; n < s.n; ++n)
+    for (int o = s.oc; o < OCB * kBlock; ++o)
+      for (int h = 0; h < OH; ++h)
+        for (int w = 0; w < OW; ++w) y[b.y(n, o, h, w)] = 0.f;
+}
+
 }  // namespace
 
 namespace {
@@ -181,7 +253,7 @@ void deconv_bwd_weights(const ConvKernels& k, const DeconvShape& s, const float*
   if (dbias) channel_sums(s.n, c.icb(), std::size_t(c.ih) * c.iw, dy, dbias);
 }
 
-const ConvKernels conv_scalar{Isa::scalar, fwd_scalar, bwd_data_scalar, bwd_weights_scalar};
+const ConvKernels conv_scalar{Isa::scalar, fwd_scalar, bwd_data_scalar, bwd_weights_scalar, fwd_winograd_scalar};
 
 #if defined(__x86_64__)
 extern const ConvKernels conv_avx2;

@@ -50,6 +50,9 @@ struct ConvKernels {
   // dw = sum over batch and pixels (fwd packed layout); dbias likewise (may be null).
   // Overwrites both.
   void (*bwd_weights)(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias);
+  // Inference only, 3x3 stride 1 (winograd_applicable): Winograd F(4x4, 3x3) with weights
+  // from pack_winograd_weights. Same contract as fwd; error bound in tests/test_conv.cpp.
+  void (*fwd_winograd)(const ConvShape& s, const float* x, const float* w_wino, const float* bias, float* y);
 };
 
 // ConvTranspose2d (PyTorch semantics, weights (in, out, kh, kw)) is the adjoint of the conv
@@ -77,6 +80,14 @@ enum class ConvPack { fwd, bwd_data };
 std::size_t conv_weight_floats(const ConvShape& s);  // either packed layout
 void pack_conv_weights(const ConvShape& s, const float* w_oihw, ConvPack pack, float* out);
 void unpack_conv_weights(const ConvShape& s, const float* w_fwd, float* w_oihw);
+
+// Winograd F(4x4, 3x3): 4x4 output tiles from 6x6 input tiles, 36 multiplies per tile and
+// channel pair instead of 144. Weights are transformed once per weight update (in double)
+// into [36][OCB][ICB][16 ic][16 oc]; each of the 36 products is then a GEMM over channels
+// run by the same register-blocked tile as the direct convolution.
+bool winograd_applicable(const ConvShape& s);
+std::size_t winograd_weight_floats(const ConvShape& s);
+void pack_winograd_weights(const ConvShape& s, const float* w_oihw, float* out);
 
 // Transposed convolution through the conv kernels (see DeconvShape). Weights are packed
 // for as_conv(): ConvPack::bwd_data for forward, ConvPack::fwd for backward-data.

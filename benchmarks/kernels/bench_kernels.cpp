@@ -147,6 +147,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
         struct Op {
           const char* op;
           std::function<void()> fn;
+          const char* algo = "direct";
         };
         std::vector<Op> ops;
         if (c.transposed) {  // deconv input = conv's y, deconv output = conv's x
@@ -158,16 +159,20 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
                  {"conv2d.bwd_data", [&] { k.bwd_data(s, y.p, w.p, x.p); }},
                  {"conv2d.bwd_weights", [&] { k.bwd_weights(s, x.p, y.p, w.p, bias.p); }}};
         }
+        // Winograd's weights are transformed once, outside the timing, as a layer would.
+        Buffer wino(kernels::winograd_applicable(s) && !c.transposed ? kernels::winograd_weight_floats(s) : 1, 5);
+        if (kernels::winograd_applicable(s) && !c.transposed)
+          ops.push_back({"conv2d.fwd", [&] { k.fwd_winograd(s, x.p, wino.p, bias.p, y.p); }, "winograd"});
         for (const auto& op : ops) {
           const double sec = median_seconds_per_call(op.fn, reps, quick ? 0.02 : 0.05);
-          Record r{c.where, op.op, "direct", c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,
+          Record r{c.where, op.op, op.algo, c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,
                    kernels::isa_name(isa), t, sec * 1e3, s.flops() / sec / 1e9, peak_before, 0};
-          if (!args.flag("--no-onednn") && isa == kernels::best_isa()) {
+          if (!args.flag("--no-onednn") && isa == kernels::best_isa() && r.algo == "direct") {
             const double ms = onednn_ms(c, op.op, reps);  // same thread count, right after ours
             if (ms > 0) r.onednn_gflops = s.flops() / ms / 1e6;
           }
           recs.push_back(r);
-          err << "  " << r.where << " " << r.op << ": " << std::setprecision(3) << r.ms << " ms\n";
+          err << "  " << r.where << " " << r.op << " (" << r.algo << "): " << std::setprecision(3) << r.ms << " ms\n";
         }
       }
       if (!quick && (only.empty() || only == "convlstm.step")) bench_convlstm_step(isa, t, reps, recs, err);
@@ -190,7 +195,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
     if (!why.empty()) err << "no PyTorch comparison: " << why << "\n";
     for (Record& r : recs) {
       auto it = torch.find({r.where, r.op, r.threads});
-      if (it != torch.end() && it->second > 0) r.torch_gflops = r.gflops * r.ms / it->second;
+      if (r.algo == "direct" && it != torch.end() && it->second > 0) r.torch_gflops = r.gflops * r.ms / it->second;
     }
   }
   if (!args.flag("--json")) {
@@ -199,7 +204,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
     for (const Record& r : recs) {
       char line[256];
       std::snprintf(line, sizeof line, "%-22s %-20s %dx%d/%d %4d->%-4d %3dx%-3d %-6s %d %9.3f %9.1f %6.1f",
-                    r.where.c_str(), r.op.c_str(), r.kh, r.kw, r.stride, r.cin, r.cout, r.h, r.w, r.isa.c_str(),
+                    r.where.c_str(), (r.algo == "direct" ? r.op : r.op + "/" + r.algo).c_str(), r.kh, r.kw, r.stride, r.cin, r.cout, r.h, r.w, r.isa.c_str(),
                     r.threads, r.ms, r.gflops, r.pct_peak);
       out << line;
       if (r.bytes > 0) {

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstddef>
 #include <utility>
+#include <vector>
 
 #include "kernels/conv.h"
 
@@ -16,8 +17,9 @@
 namespace yelan::kernels {
 namespace {
 #include "kernels/conv_direct.inl"
+#include "kernels/conv_winograd.inl"
 }  // namespace
 
-extern const ConvKernels conv_neon{Isa::neon, conv_fwd, conv_bwd_data, conv_bwd_weights};
+extern const ConvKernels conv_neon{Isa::neon, conv_fwd, conv_bwd_data, conv_bwd_weights, conv_fwd_winograd};
 
 }  // namespace yelan::kernels

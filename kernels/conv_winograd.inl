@@ -1,0 +1,128 @@
+// Winograd F(4x4, 3x3) forward on native vectors, after conv_direct.inl (it reuses the
+// register-blocked `tile` as the GEMM over channels). Tiles are processed in chunks of
+// kWinoChunk per thread: input transform -> 36 GEMMs -> output transform, all in a
+// thread-local scratch that stays in L2 and is allocated once per thread.
+
+constexpr int kWinoChunk = 48;
+
+// B^T d for six vectors (one column or row of a 6x6 tile).
+inline void wino_bt(const vn d[6], vn o[6]) {
+  const vn four = vn{} + 4.f, five = vn{} + 5.f, two = vn{} + 2.f;
+  o[0] = four * d[0] - five * d[2] + d[4];
+  o[1] = d[3] + d[4] - four * (d[1] + d[2]);
+  o[2] = four * (d[1] - d[2]) + d[4] - d[3];
+  o[3] = two * (d[3] - d[1]) + d[4] - d[2];
+  o[4] = two * (d[1] - d[3]) + d[4] - d[2];
+  o[5] = four * d[1] - five * d[3] + d[5];
+}
+
+// A^T m: six vectors to four.
+inline void wino_at(const vn m[6], vn o[4]) {
+  const vn a = m[1] + m[2], b = m[1] - m[2], c = m[3] + m[4], d = m[3] - m[4];
+  o[0] = m[0] + a + c;
+  o[1] = b + (vn{} + 2.f) * d;
+  o[2] = a + (vn{} + 4.f) * c;
+  o[3] = b + (vn{} + 8.f) * d + m[5];
+}
+
+struct WinoScratch {
+  std::vector<float> v, m;  // [36][ICB][chunk][16], [36][OCB][chunk][16]
+};
+
+void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
+  const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb();
+  const int TH = (OH + 3) / 4, TW = (OW + 3) / 4, T = TH * TW;
+  const int chunks = (T + kWinoChunk - 1) / kWinoChunk;
+  const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock, y_plane = std::ptrdiff_t(OH) * OW * kBlock;
+  const std::ptrdiff_t cs = std::ptrdiff_t(kWinoChunk) * kBlock;  // one channel block of one product
+#pragma omp parallel
+  {
+    thread_local WinoScratch scratch;
+    scratch.v.resize(std::size_t(36) * ICB * cs);
+    scratch.m.resize(std::size_t(36) * OCB * cs);
+    float* V = scratch.v.data();
+    float* M = scratch.m.data();
+#pragma omp for collapse(2) schedule(static)
+    for (int n = 0; n < s.n; ++n)
+      for (int ch = 0; ch < chunks; ++ch) {
+        const int t0 = ch * kWinoChunk, tc = std::min(kWinoChunk, T - t0);
+        // Input transform: V[xi][cb][t] = (B^T d B)[xi] for the tile's 6x6 input patch.
+        for (int cb = 0; cb < ICB; ++cb) {
+          const float* xb = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane;
+          for (int t = 0; t < tc; ++t) {
+            const int ih0 = (t0 + t) / TW * 4 - s.pad_h, iw0 = (t0 + t) % TW * 4 - s.pad_w;
+            for (int q = 0; q < CONV_NV; ++q) {
+              vn d[6][6], r[6][6];
+              for (int i = 0; i < 6; ++i)
+                for (int j = 0; j < 6; ++j) {
+                  const int ih = ih0 + i, iw = iw0 + j;
+                  d[i][j] = ih >= 0 && ih < s.ih && iw >= 0 && iw < s.iw
+                                ? loadv(xb + (std::ptrdiff_t(ih) * s.iw + iw) * kBlock + q * CONV_VL)
+                                : vn{};
+                }
+              for (int j = 0; j < 6; ++j) {  // columns: r[.][j] = B^T d[.][j]
+                vn col[6], out[6];
+                for (int i = 0; i < 6; ++i) col[i] = d[i][j];
+                wino_bt(col, out);
+                for (int i = 0; i < 6; ++i) r[i][j] = out[i];
+              }
+              for (int i = 0; i < 6; ++i) {  // rows: (B^T d) B
+                vn out[6];
+                wino_bt(r[i], out);
+                for (int j = 0; j < 6; ++j)
+                  storev(V + ((std::ptrdiff_t(i * 6 + j) * ICB + cb) * kWinoChunk + t) * kBlock + q * CONV_VL, out[j]);
+              }
+            }
+          }
+        }
+        // 36 GEMMs: M[xi][ob][t] = sum over channels of V[xi][cb][t] U[xi][ob][cb].
+        Tap one{0, 0};
+        for (int xi = 0; xi < 36; ++xi)
+          for (int ob0 = 0; ob0 < OCB; ob0 += CONV_NB) {
+            const int nb = std::min(CONV_NB, OCB - ob0);
+            TileArgs a;
+            a.src_r = kBlock;
+            a.src_cb = cs;
+            a.w = u + (std::ptrdiff_t(xi) * OCB + ob0) * ICB * kBlock * kBlock;
+            a.w_cb = kBlock * kBlock;
+            a.w_ob = std::ptrdiff_t(ICB) * kBlock * kBlock;
+            a.taps = &one;
+            a.ntaps = 1;
+            a.ncb = ICB;
+            a.dst_r = kBlock;
+            a.dst_ob = cs;
+            a.bias = nullptr;
+            for (int t = 0; t < tc; t += CONV_R) {
+              const int r = std::min(CONV_R, tc - t);
+              a.src = V + (std::ptrdiff_t(xi) * ICB * kWinoChunk + t) * kBlock;
+              a.dst = M + ((std::ptrdiff_t(xi) * OCB + ob0) * kWinoChunk + t) * kBlock;
+              kTiles[nb - 1][r - 1](a);
+            }
+          }
+        // Output transform: y = A^T M A + bias, clipped at the image's right and bottom.
+        for (int ob = 0; ob < OCB; ++ob) {
+          float* yb = y + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
+          for (int t = 0; t < tc; ++t) {
+            const int oh0 = (t0 + t) / TW * 4, ow0 = (t0 + t) % TW * 4;
+            for (int q = 0; q < CONV_NV; ++q) {
+              const vn b = bias ? loadv(bias + ob * kBlock + q * CONV_VL) : vn{};
+              vn r[4][6];
+              for (int j = 0; j < 6; ++j) {
+                vn col[6], out[4];
+                for (int i = 0; i < 6; ++i)
+                  col[i] = loadv(M + ((std::ptrdiff_t(i * 6 + j) * OCB + ob) * kWinoChunk + t) * kBlock + q * CONV_VL);
+                wino_at(col, out);
+                for (int i = 0; i < 4; ++i) r[i][j] = out[i];
+              }
+              for (int i = 0; i < 4 && oh0 + i < OH; ++i) {
+                vn out[4];
+                wino_at(r[i], out);
+                for (int j = 0; j < 4 && ow0 + j < OW; ++j)
+                  storev(yb + (std::ptrdiff_t(oh0 + i) * OW + ow0 + j) * kBlock + q * CONV_VL, out[j] + b);
+              }
+            }
+          }
+        }
+      }
+  }
+}
