@@ -1,7 +1,9 @@
 #include "kernels/conv.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
+#include <new>
 
 #include "kernels/dispatch.h"
 
@@ -46,6 +48,23 @@ void unpack_conv_weights(const ConvShape& s, const float* p, float* w) {
           w[((std::size_t(o) * s.ic + i) * s.kh + y) * s.kw + x] =
               p[((((std::size_t(ob) * ICB + cb) * s.kh + y) * s.kw + x) * kBlock + ci) * kBlock + co];
         }
+}
+
+float* thread_scratch(std::size_t floats) {
+  struct Scratch {
+    float* p = nullptr;
+    std::size_t n = 0;
+    ~Scratch() { std::free(p); }
+  };
+  thread_local Scratch s;
+  if (s.n < floats) {
+    std::free(s.p);
+    s.n = 0;
+    s.p = static_cast<float*>(std::aligned_alloc(64, (floats * sizeof(float) + 63) / 64 * 64));
+    if (!s.p) throw std::bad_alloc();
+    s.n = floats;
+  }
+  return s.p;
 }
 
 bool winograd_applicable(const ConvShape& s) { return s.valid() && s.kh == 3 && s.kw == 3 && s.stride == 1; }

@@ -86,6 +86,10 @@ void unpack_conv_weights(const ConvShape& s, const float* w_fwd, float* w_oihw);
 // into [36][OCB][ICB][16 ic][16 oc]; each of the 36 products is then a GEMM over channels
 // run by the same register-blocked tile as the direct convolution.
 bool winograd_applicable(const ConvShape& s);
+// The calling thread's scratch of at least `floats` floats, 64-byte aligned, grown (never
+// shrunk) on demand: after the first call of a shape, no allocation. Defined in a baseline
+// file so that no container code is instantiated inside an ISA variant.
+float* thread_scratch(std::size_t floats);
 std::size_t winograd_weight_floats(const ConvShape& s);
 void pack_winograd_weights(const ConvShape& s, const float* w_oihw, float* out);
 

@@ -1,7 +1,7 @@
 // Winograd F(4x4, 3x3) forward on native vectors, after conv_direct.inl (it reuses the
 // register-blocked `tile` as the GEMM over channels). Tiles are processed in chunks of
 // kWinoChunk per thread: input transform -> 36 GEMMs -> output transform, all in a
-// thread-local scratch that stays in L2 and is allocated once per thread.
+// thread's scratch (thread_scratch) that stays in L2 and is allocated once per thread.
 
 constexpr int kWinoChunk = 48;
 
@@ -25,10 +25,6 @@ inline void wino_at(const vn m[6], vn o[4]) {
   o[3] = b + (vn{} + 8.f) * d + m[5];
 }
 
-struct WinoScratch {
-  std::vector<float> v, m;  // [36][ICB][chunk][16], [36][OCB][chunk][16]
-};
-
 void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
   const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb();
   const int TH = (OH + 3) / 4, TW = (OW + 3) / 4, T = TH * TW;
@@ -37,11 +33,9 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
   const std::ptrdiff_t cs = std::ptrdiff_t(kWinoChunk) * kBlock;  // one channel block of one product
 #pragma omp parallel
   {
-    thread_local WinoScratch scratch;
-    scratch.v.resize(std::size_t(36) * ICB * cs);
-    scratch.m.resize(std::size_t(36) * OCB * cs);
-    float* V = scratch.v.data();
-    float* M = scratch.m.data();
+    // V: [36][ICB][chunk][16] transformed inputs, M: [36][OCB][chunk][16] products
+    float* V = thread_scratch(std::size_t(36) * (ICB + OCB) * cs);
+    float* M = V + std::size_t(36) * ICB * cs;
 #pragma omp for collapse(2) schedule(static)
     for (int n = 0; n < s.n; ++n)
       for (int ch = 0; ch < chunks; ++ch) {
