@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <charconv>
+#include <climits>
 #include <cstring>
 
 #include "camera/io/aedat4.h"
@@ -39,9 +40,25 @@ class Aedat4Reader final : public EventReader {
   }
   std::uint64_t position() const override { return src_.offset(); }
   std::uint64_t file_size() const override { return src_.size(); }
+  bool fast_seek() const override { return data_table_ >= 0; }
 
  protected:
   void restart() override { src_.seek(first_packet_); }
+
+  // Jumps to the first event packet that ends at or after t, using the file's data table
+  // (FileDataTable: byte offset, stream, timestamps per packet). A missing or unreadable
+  // table only costs speed: the caller then decodes from the start.
+  bool seek_index(std::int64_t t) override {
+    if (!table_loaded_) load_table();
+    if (table_.empty()) return false;
+    for (const auto& [offset, t_end] : table_)
+      if (t_end >= t) {
+        src_.seek(offset - 8);
+        return true;
+      }
+    src_.seek(static_cast<std::uint64_t>(data_table_));
+    return true;
+  }
 
   bool decode(std::vector<Event>& out) override {
     const std::uint64_t at = src_.offset();
@@ -149,7 +166,42 @@ class Aedat4Reader final : public EventReader {
     warn_skipped(src_.offset(), "events with negative coordinates (dropped)", bad_xy);
   }
 
+  void load_table() {
+    table_loaded_ = true;
+    if (data_table_ < 0 || static_cast<std::uint64_t>(data_table_) >= src_.size()) return;
+    const std::uint64_t n = src_.size() - static_cast<std::uint64_t>(data_table_);
+    if (n > kMaxPacketBytes) return;
+    const std::uint64_t back = src_.offset();
+    std::vector<unsigned char> packed(static_cast<std::size_t>(n)), plain;
+    src_.seek(static_cast<std::uint64_t>(data_table_));
+    src_.read_exact(packed.data(), packed.size(), "data table");
+    src_.seek(back);
+    std::string problem;
+    if (!decompress(codec_, packed.data(), packed.size(), kMaxDecompressedBytes, plain, problem)) return;
+    if (plain.size() < 12 || std::memcmp(plain.data() + 8, "FTAB", 4) != 0) return;
+    std::vector<std::pair<std::uint64_t, std::int64_t>> table;
+    try {
+      const unsigned char* p = plain.data() + 4;
+      const std::size_t size = plain.size() - 4;
+      auto defs = flat::field_vector(flat::root(p, size), 0, 4);
+      if (!defs) return;
+      for (std::size_t i = 0; i < defs->second; ++i) {
+        flat::Table d = flat::table_at(p, size, defs->first + 4 * i);
+        auto info = flat::field(d, 1, 8);
+        const std::int64_t offset = flat::field_i64(d, 0, -1);
+        if (!info || load_le<std::int32_t>(p + *info) != event_stream_) continue;
+        if (offset < static_cast<std::int64_t>(first_packet_ + 8) || offset >= data_table_) return;
+        table.emplace_back(static_cast<std::uint64_t>(offset), flat::field_i64(d, 4, INT64_MAX));
+      }
+    } catch (const flat::FlatError&) {
+      return;
+    }
+    table_ = std::move(table);
+  }
+
   ByteSource src_;
+  bool table_loaded_ = false;
+  std::vector<std::pair<std::uint64_t, std::int64_t>> table_;  // event packets: payload offset, last t
   Codec codec_ = Codec::none;
   std::int64_t data_table_ = -1;
   std::uint64_t first_packet_ = 0;

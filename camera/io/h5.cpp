@@ -1,5 +1,7 @@
 #include "camera/io/h5.h"
 
+#include <cstdint>
+
 namespace yelan::camera::h5 {
 
 void H5Id::reset() noexcept {
@@ -85,6 +87,47 @@ void append_1d(hid_t dataset, hid_t mem_type, const void* data, hsize_t n) {
   check(H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "selection");
   H5Id mem_space = check(H5Screate_simple(1, count, nullptr), "dataspace");
   check(H5Dwrite(dataset, mem_type, mem_space.get(), file_space.get(), H5P_DEFAULT, data), "cannot write dataset");
+}
+
+std::uint64_t chunk_bytes(hid_t dataset) {
+  H5Id dcpl = check(H5Dget_create_plist(dataset), "dataset properties");
+  if (H5Pget_layout(dcpl.get()) != H5D_CHUNKED) return 0;
+  hsize_t dims[8] = {};
+  const int rank = H5Pget_chunk(dcpl.get(), 8, dims);
+  if (rank < 0 || rank > 8) throw H5Failure("bad chunk rank");
+  H5Id type = check(H5Dget_type(dataset), "dataset type");
+  long double bytes = static_cast<long double>(H5Tget_size(type.get()));
+  for (int i = 0; i < rank; ++i) bytes *= static_cast<long double>(dims[i]);
+  return bytes > 1e18L ? UINT64_MAX : static_cast<std::uint64_t>(bytes);
+}
+
+void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t file_size,
+                         std::uint64_t max_bytes) {
+  H5Id dcpl = check(H5Dget_create_plist(dataset), "dataset properties");
+  if (H5Pget_layout(dcpl.get()) != H5D_CHUNKED || n == 0) return;
+  hsize_t dims[8] = {};
+  const int rank = H5Pget_chunk(dcpl.get(), 8, dims);
+  if (rank < 1 || rank > 8 || dims[0] == 0) throw H5Failure("bad chunk shape");
+  const auto full = shape(dataset);
+  if (full.size() != static_cast<std::size_t>(rank)) throw H5Failure("chunk rank differs from dataset rank");
+  hsize_t coord[8] = {};
+  for (hsize_t row = first / dims[0] * dims[0]; row < first + n; row += dims[0]) {
+    coord[0] = row;
+    // Every chunk across the other dimensions (v2e's N x 4 may be chunked by column).
+    for (hsize_t col = 0; col < (rank > 1 ? full[1] : 1); col += (rank > 1 ? dims[1] : 1)) {
+      if (rank > 1) coord[1] = col;
+      unsigned mask = 0;
+      haddr_t addr = HADDR_UNDEF;
+      hsize_t bytes = 0;
+      if (H5Dget_chunk_info_by_coord(dataset, coord, &mask, &addr, &bytes) < 0) throw H5Failure("bad chunk index");
+      if (addr == HADDR_UNDEF) continue;  // never written: reads as the fill value
+      if (bytes > max_bytes || addr > file_size || bytes > file_size - addr)
+        throw H5Failure("chunk at row " + std::to_string(row) + " claims " + std::to_string(bytes) +
+                        " bytes at address " + std::to_string(addr) + " of a " + std::to_string(file_size) +
+                        "-byte file");
+      if (rank > 2) break;
+    }
+  }
 }
 
 std::vector<hsize_t> shape(hid_t dataset) {

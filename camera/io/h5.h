@@ -58,6 +58,15 @@ H5Id untimed_dataset_props();
 H5Id create_growing_1d(hid_t loc, const std::string& name, hid_t type, hsize_t chunk);
 void append_1d(hid_t dataset, hid_t mem_type, const void* data, hsize_t n);
 
+// Bytes of one chunk of a chunked dataset (0 when not chunked). A corrupt file can claim
+// chunks of any size, and HDF5 allocates a whole chunk to read one element of it.
+std::uint64_t chunk_bytes(hid_t dataset);
+
+// Throws H5Failure when a stored chunk holding rows [first, first+n) of a chunked dataset
+// lies past the end of the file or claims more than max_bytes: HDF5 would allocate it whole.
+void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t file_size,
+                         std::uint64_t max_bytes);
+
 // Dataset shape (empty for a scalar).
 std::vector<hsize_t> shape(hid_t dataset);
 // Reads rows [first, first+n) of a 1-D dataset (or a column `col` of a 2-D one) as `mem_type`.

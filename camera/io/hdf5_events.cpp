@@ -14,6 +14,8 @@ namespace yelan::camera {
 namespace {
 
 constexpr hsize_t kRowsPerRead = 1 << 16;
+// HDF5 holds a whole chunk in memory to read from it; ours are 64Ki rows (512 KiB).
+constexpr std::uint64_t kMaxChunkBytes = 64u << 20;
 constexpr int kOurVersion = 1;
 // ms_to_idx holds one entry per millisecond: 100 M entries (800 MB) is 27.8 hours.
 constexpr std::int64_t kMaxIndexedSpanUs = 100'000'000'000LL;
@@ -49,6 +51,8 @@ class Hdf5Reader final : public EventReader {
     const hsize_t n = std::min(kRowsPerRead, rows_ - next_);
     for (auto& c : cols_) c.resize(n);
     try {
+      for (int k = 0; k < (matrix_.valid() ? 1 : 4); ++k)
+        h5::check_stored_chunks(column_ds(k), next_, n, size_, kMaxChunkBytes);
       for (int k = 0; k < 4; ++k)
         h5::read_rows(column_ds(k), H5T_NATIVE_INT64, next_, n, cols_[static_cast<std::size_t>(k)].data(),
                       matrix_.valid() ? matrix_col_[static_cast<std::size_t>(k)] : -1);
@@ -80,6 +84,7 @@ class Hdf5Reader final : public EventReader {
     }
     std::uint64_t idx = 0;
     try {
+      h5::check_stored_chunks(ms_to_idx_.get(), static_cast<hsize_t>(k), 1, size_, kMaxChunkBytes);
       h5::read_rows(ms_to_idx_.get(), H5T_NATIVE_UINT64, static_cast<hsize_t>(k), 1, &idx);
     } catch (const h5::H5Failure&) {
       return false;
@@ -115,6 +120,7 @@ class Hdf5Reader final : public EventReader {
       if (H5Oget_info_by_name(f, "events", &oi, H5P_DEFAULT) < 0 || oi.type != H5O_TYPE_DATASET)
         throw FormatError(path_, 0, "HDF5 file has an `events` group without x/y/p/t datasets");
       matrix_ = h5::check(H5Dopen2(f, "events", H5P_DEFAULT), "dataset events");
+      check_chunks(matrix_.get(), "events");
       const auto dims = h5::shape(matrix_.get());
       if (dims.size() != 2 || dims[1] != 4)
         throw FormatError(path_, 0, "v2e `events` must be N x 4 (t, x, y, p)");
@@ -124,10 +130,18 @@ class Hdf5Reader final : public EventReader {
     }
     info_.events = rows_;
     if (rows_ > 0) {
+      h5::check_stored_chunks(column_ds(0), 0, 1, size_, kMaxChunkBytes);
       std::int64_t t0 = 0;
       h5::read_rows(column_ds(0), H5T_NATIVE_INT64, 0, 1, &t0, matrix_.valid() ? 0 : -1);
       info_.t_first = t0 + t_offset_;
     }
+  }
+
+  void check_chunks(hid_t ds, const std::string& name) {
+    const std::uint64_t bytes = h5::chunk_bytes(ds);
+    if (bytes > kMaxChunkBytes)
+      throw FormatError(path_, 0, "/" + name + " claims chunks of " + std::to_string(bytes) +
+                                      " bytes (more than 64 MiB: corrupt?)");
   }
 
   void open_columns(const std::string& group) {
@@ -137,6 +151,7 @@ class Hdf5Reader final : public EventReader {
       if (!h5::exists(file_.get(), name)) throw FormatError(path_, 0, "HDF5 file lacks dataset /" + name);
       auto& ds = columns_[static_cast<std::size_t>(k)];
       ds = h5::check(H5Dopen2(file_.get(), name.c_str(), H5P_DEFAULT), "dataset " + name);
+      check_chunks(ds.get(), name);
       H5Id type = h5::check(H5Dget_type(ds.get()), "type of " + name);
       const H5T_class_t cls = H5Tget_class(type.get());
       if (cls != H5T_INTEGER) throw FormatError(path_, 0, "/" + name + " is not an integer dataset");
@@ -152,6 +167,7 @@ class Hdf5Reader final : public EventReader {
   void open_ms_index(const std::string& name) {
     if (!h5::exists(file_.get(), name)) return;
     ms_to_idx_ = h5::check(H5Dopen2(file_.get(), name.c_str(), H5P_DEFAULT), "dataset " + name);
+    check_chunks(ms_to_idx_.get(), name);
     const auto dims = h5::shape(ms_to_idx_.get());
     if (dims.size() != 1) {
       ms_to_idx_.reset();

@@ -92,7 +92,8 @@ class NpyReader final : public EventReader {
     for (std::size_t p = h.find('(', lb); p != std::string::npos && p < rb; p = h.find('(', p + 1)) {
       const auto q1 = h.find('\'', p), q2 = h.find('\'', q1 + 1), q3 = h.find('\'', q2 + 1), q4 = h.find('\'', q3 + 1);
       const auto close = h.find(')', p);
-      if (q4 == std::string::npos || q4 > close) src_.fail_at(at, "malformed dtype field in the .npy header");
+      if (close == std::string::npos || q4 == std::string::npos || q4 > close)
+        src_.fail_at(at, "malformed dtype field in the .npy header");
       const std::string name = h.substr(q1 + 1, q2 - q1 - 1), type = h.substr(q3 + 1, q4 - q3 - 1);
       if (type.size() < 3) src_.fail_at(at, "malformed dtype '" + type + "'");
       std::size_t size = 0;

@@ -264,3 +264,23 @@ TEST_CASE("truncated and corrupted ours (HDF5) gives FormatErrors", "[io][h5][ba
   Result r = try_read(p, 200'000);
   CHECK(r.outcome != Outcome::all);
 }
+
+TEST_CASE("fuzz finding: an HDF5 chunk claiming 4 GB is refused before HDF5 allocates it", "[io][h5][bad][fuzz]") {
+  // Found by tests/fuzz/fuzz_hdf5: a mutated copy of one of our files whose chunk index says
+  // the first chunk of /events/t holds 4,294,964,836 bytes at byte 14,303 of a 15,475-byte file.
+  const std::string p = (std::filesystem::path(__FILE__).parent_path() / "data" / "fuzz_hdf5_huge_chunk.h5").string();
+  REQUIRE(std::filesystem::exists(p));
+  CHECK_THROWS_WITH(yelan::camera::open_event_file(p),
+                    p + ": offset 0: HDF5: chunk at row 0 claims 4294964836 bytes at address 14303 of a 15475-byte file");
+}
+
+TEST_CASE("fuzz finding: a .npy dtype field without its closing parenthesis", "[io][npy][bad][fuzz]") {
+  // Found by tests/fuzz/fuzz_npy: the field scan restarted from the top of the header forever.
+  ScratchDir dir("npyparen");
+  const std::string dict = "{'descr': [('t', '<i8'] }\n";
+  std::vector<unsigned char> b = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0, static_cast<unsigned char>(dict.size()), 0};
+  b.insert(b.end(), dict.begin(), dict.end());
+  write_bytes(dir.file("p.npy"), b);
+  CHECK_THROWS_WITH(yelan::camera::open_event_file(dir.file("p.npy")),
+                    dir.file("p.npy") + ": offset 10: malformed dtype field in the .npy header");
+}

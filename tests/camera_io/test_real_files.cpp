@@ -130,6 +130,7 @@ TEST_CASE("time windows split a real stream exactly at t < T", "[io][window][rea
 TEST_CASE("seek positions a real stream on the first event at or after T", "[io][seek][real]") {
   const std::string path = yelan::test::shared_data_or_skip("events/aestream_davis.aedat4");
   auto r = open_event_file(path);
+  CHECK(r->fast_seek());  // through the file's data table
   const auto all = yelan::test::read_all(*r);
   const std::int64_t T = 1633953691040000;
   const auto it = std::lower_bound(all.begin(), all.end(), T, [](const Event& e, std::int64_t t) { return e.t < t; });
@@ -139,6 +140,11 @@ TEST_CASE("seek positions a real stream on the first event at or after T", "[io]
   CHECK(rest.front() == *it);
   r->rewind();
   CHECK(yelan::test::read_all(*r).size() == 117667);
+  for (std::int64_t t : {std::int64_t{0}, all.front().t, all.back().t, all.back().t + 1}) {
+    r->seek(t);
+    const auto from = std::lower_bound(all.begin(), all.end(), t, [](const Event& e, std::int64_t v) { return e.t < v; });
+    CHECK(yelan::test::read_all(*r).size() == static_cast<std::size_t>(all.end() - from));
+  }
 }
 
 TEST_CASE("format detection by magic bytes, not by extension", "[io][detect][real]") {

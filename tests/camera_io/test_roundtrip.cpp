@@ -2,6 +2,7 @@
 // atomic (no temporary left, an unfinished writer leaves nothing) and ours is byte-reproducible.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstring>
 #include <random>
 
@@ -56,6 +57,11 @@ void check_roundtrip(const std::string& ext, const std::string& format, bool kee
   REQUIRE(back.size() == ev.size());
   CHECK(back == ev);
   CHECK(r->warnings().total() == 0);
+  // Seeking lands on the first event at or after T, by index or by decoding.
+  const Event& mid = ev[ev.size() / 2 + 1];
+  r->seek(mid.t);
+  const auto from = std::find_if(ev.begin(), ev.end(), [&](const Event& e) { return e.t >= mid.t; });
+  CHECK(read_all(*r) == std::vector<Event>(from, ev.end()));
 }
 
 void roundtrip_real(const std::string& rel, const std::string& ext) {
