@@ -92,7 +92,7 @@ void print_json(const std::vector<Record>& recs, std::ostream& out) {
 }  // namespace
 
 int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench events", argv, {"--events", "--reps", "--k", "--width", "--height", "--file"},
+  cli::Args args("bench events", argv, {"--events", "--reps", "--k", "--width", "--height", "--file", "--threads"},
                  {"--quick", "--json"});
   args.expect_positionals(0, 0);
   const bool quick = args.flag("--quick");
@@ -101,6 +101,7 @@ int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, st
   const int k = args.int_value_or("--k", 3, 1, 64);
   const int width = args.int_value_or("--width", 346, 1, 8192);
   const int height = args.int_value_or("--height", 260, 1, 8192);
+  const int threads = args.int_value_or("--threads", 1, 1, 1024);  // extra read-out records
 
   std::vector<std::pair<std::string, std::vector<Event>>> streams = {
       {"tore_update_random", random_stream(n, width, height, 1)},
@@ -170,12 +171,19 @@ int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, st
     recs.push_back({baldwin ? "tore_readout_baldwin" : "tore_readout", "ms/volume", s * 1e3, s,
                     base, "memset", bytes});
   }
+  if (threads > 1) {
+    const double s = median_seconds(reps, [&] {
+                       for (int i = 0; i < per_rep; ++i) tore.readout(t_read + i, volume.data(), threads);
+                     }) / per_rep;
+    recs.push_back({"tore_readout_" + std::to_string(threads) + "threads", "ms/volume", s * 1e3, s, base,
+                    "memset", bytes});
+  }
 
   if (args.flag("--json")) {
     print_json(recs, out);
   } else {
     out << "events bench: " << width << "x" << height << ", K=" << k << ", " << n
-        << " events per stream, median of " << reps << ", 1 thread, isa "
+        << " events per stream, median of " << reps << ", 1 thread unless named, isa "
         << kernels::isa_name(kernels::active_isa()) << "\n";
     print_text(recs, out);
   }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -176,7 +177,7 @@ class Schedule {
 int run_repr(const std::vector<std::string>& argv, std::ostream& out) {
   Args args("repr", argv,
             {"--type", "--k", "--bins", "--tau-us", "--window-us", "--events", "--width", "--height",
-             "--at", "--fps", "--png", "--baf-us", "--refractory-us"},
+             "--at", "--fps", "--png", "--baf-us", "--refractory-us", "--max-volumes"},
             {"--quiet"});
   args.expect_positionals(2, 2);
   const std::string in = args.positionals()[0], out_path = args.positionals()[1];
@@ -235,14 +236,20 @@ int run_repr(const std::vector<std::string>& argv, std::ostream& out) {
     }
   }
   FilterChain filters;
+  constexpr std::int64_t kMaxSpan = std::int64_t{1} << 40;
   if (auto v = args.value("--baf-us")) {
-    filters.baf = std::make_unique<camera::BackgroundActivityFilter>(width, height, parse_i64("--baf-us", *v, 0, std::int64_t{1} << 40));
-    attrs.push_back({"baf_us", parse_i64("--baf-us", *v, 0, std::int64_t{1} << 40)});
+    const std::int64_t window = parse_i64("--baf-us", *v, 0, kMaxSpan);
+    filters.baf = std::make_unique<camera::BackgroundActivityFilter>(width, height, window);
+    attrs.push_back({"baf_us", window});
   }
   if (auto v = args.value("--refractory-us")) {
-    filters.refractory = std::make_unique<camera::RefractoryFilter>(width, height, parse_i64("--refractory-us", *v, 0, std::int64_t{1} << 40));
-    attrs.push_back({"refractory_us", parse_i64("--refractory-us", *v, 0, std::int64_t{1} << 40)});
+    const std::int64_t period = parse_i64("--refractory-us", *v, 0, kMaxSpan);
+    filters.refractory = std::make_unique<camera::RefractoryFilter>(width, height, period);
+    attrs.push_back({"refractory_us", period});
   }
+  // A corrupt timestamp far in the future must not turn --fps into a disk-filling loop.
+  const std::int64_t max_volumes = parse_i64("--max-volumes", args.value_or("--max-volumes", "100000"), 1,
+                                             std::int64_t{1} << 40);
   std::optional<std::filesystem::path> png_dir;
   if (auto d = args.value("--png")) {
     png_dir = *d;
@@ -255,6 +262,10 @@ int run_repr(const std::vector<std::string>& argv, std::ostream& out) {
     camera::VolumeFileWriter writer(out_path, type, repr->channels(), height, width, attrs);
     std::vector<float> volume(std::size_t(repr->channels()) * width * height);
     auto emit = [&](std::int64_t t) {
+      if (writer.count() >= max_volumes)
+        throw std::runtime_error("more than " + std::to_string(max_volumes) + " volumes to write (the " +
+                                 std::to_string(max_volumes + 1) + "th at t = " + std::to_string(t) +
+                                 " us); raise --max-volumes if that is intended");
       repr->readout(t, volume.data());
       writer.append(t, volume.data());
       if (png_dir) {
@@ -267,14 +278,14 @@ int run_repr(const std::vector<std::string>& argv, std::ostream& out) {
 
     std::vector<Event> batch;
     std::uint64_t events = 0;
-    std::int64_t t_last = 0;
+    std::int64_t t_last = std::numeric_limits<std::int64_t>::min();
     while (true) {
       batch.clear();
       if (reader->read(batch, kBatch) == 0) break;
       if (events == 0) schedule->start(batch.front().t);
       if (!schedule->next()) break;  // every --at time is written: the rest cannot matter
       events += batch.size();
-      t_last = batch.back().t;
+      for (const Event& e : batch) t_last = std::max(t_last, e.t);
       filters.apply(batch);
       // Feed events up to each due time, read out, go on: a volume at T holds every event
       // with t <= T (the stream is in time order; the reader counts any disorder).

@@ -35,7 +35,7 @@ const std::vector<Command>& commands() {
        "usage: yelan repr --type tore|tore-baldwin|count|voxel|surface (--at T1,T2,... | --fps F)\n"
        "                  [--k 3] [--tau-us US] [--window-us 20000] [--events 7500] [--bins 5]\n"
        "                  [--width W --height H] [--baf-us 70000] [--refractory-us US]\n"
-       "                  [--png DIR] [--quiet] IN OUT.h5\n"
+       "                  [--png DIR] [--max-volumes 100000] [--quiet] IN OUT.h5\n"
        "Reads IN (any file `yelan info` reads) and writes OUT.h5 atomically: `volumes`\n"
        "(N x C x H x W float32) and `t` (N int64 us). A volume at T holds the events with t <= T.\n"
        "--at: absolute times in us, increasing. --fps F: every 1/F s after the first event, up\n"

@@ -213,6 +213,18 @@ TEST_CASE("yelan repr: bad usage and bad input exit 2 and leave no output", "[cm
   CHECK(read_volumes(out).at(0, 0, 1, 1) == 1.f);
 }
 
+TEST_CASE("yelan repr --fps refuses to write more than --max-volumes volumes", "[cmd_repr]") {
+  TempDir dir("max");
+  write_text(dir / "in.txt", "0 0 0 1\n10000000000 1 1 1\n");  // a timestamp 10^4 s later
+  Result r = yelan_cli({"repr", "--type", "surface", "--fps", "1", "--max-volumes", "5", dir / "in.txt", dir / "o.h5"});
+  CHECK(r.code == 1);
+  CHECK(has(r.err, "more than 5 volumes"));
+  CHECK_FALSE(fs::exists(dir / "o.h5"));
+  CHECK(no_temp_files(dir.path));
+  r = yelan_cli({"repr", "--type", "surface", "--fps", "1", "--max-volumes", "5", "--at", "1", dir / "in.txt", dir / "o.h5"});
+  CHECK(r.code == 2);
+}
+
 TEST_CASE("yelan repr on the DAVIS346 AEDAT4 sample: 12 volumes at 100 fps over its 130 ms", "[cmd_repr]") {
   const std::string in = yelan::test::shared_data_or_skip("events/aestream_davis.aedat4");
   TempDir dir("davis");
