@@ -91,7 +91,8 @@ void print_json(const std::vector<Record>& recs, std::ostream& out) {
 
 }  // namespace
 
-int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+// Usage errors are thrown (cli::UsageError), so nothing is written to the error stream.
+int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& /*err*/) {
   cli::Args args("bench events", argv, {"--events", "--reps", "--k", "--width", "--height", "--file", "--threads"},
                  {"--quick", "--json"});
   args.expect_positionals(0, 0);
