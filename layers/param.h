@@ -1,0 +1,60 @@
+// Parameters and buffers of a layer: the master copy in PyTorch's layout (so weights files
+// map 1:1 to state_dict keys), the gradient beside it, and whether an optimizer updates it.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace yelan::layers {
+
+// A 64-byte aligned float array (layers may not depend on engine/, so not a Tensor).
+class Floats {
+ public:
+  Floats() = default;
+  explicit Floats(std::size_t n);  // zero-filled
+  float* data() { return p_.get(); }
+  const float* data() const { return p_.get(); }
+  std::size_t size() const { return n_; }
+  float& operator[](std::size_t i) { return p_.get()[i]; }
+  float operator[](std::size_t i) const { return p_.get()[i]; }
+  void zero();
+
+ private:
+  struct Free {
+    void operator()(float* p) const;
+  };
+  std::unique_ptr<float, Free> p_;
+  std::size_t n_ = 0;
+};
+
+struct Param {
+  std::string name;                 // state_dict key relative to the owning layer
+  std::vector<std::int64_t> shape;  // PyTorch shape
+  Floats value, grad;
+  bool trainable = true;            // false: BN running statistics, num_batches_tracked
+  Param(std::string n, std::vector<std::int64_t> s, bool train = true);
+  std::size_t numel() const { return value.size(); }
+};
+
+// Appends `prefix + p.name` views of a layer's parameters to a model-wide list.
+struct NamedParam {
+  std::string key;
+  Param* param;
+};
+using ParamList = std::vector<NamedParam>;
+
+// PyTorch's default initialisation of conv/linear layers: U(-1/sqrt(fan_in), 1/sqrt(fan_in))
+// for weights and biases (kaiming_uniform with a = sqrt(5) reduces to this bound).
+void init_uniform_fan_in(Param& p, std::int64_t fan_in, std::uint64_t seed);
+
+// A blocked NCHW16c activation: n x ceil(c/16) x h x w x 16 floats, padding lanes zero.
+struct Act {
+  float* data = nullptr;
+  int n = 0, c = 0, h = 0, w = 0;
+  int cb() const { return (c + 15) / 16; }
+  std::size_t pixels() const { return std::size_t(h) * w; }
+  std::size_t floats() const { return std::size_t(n) * cb() * pixels() * 16; }
+};
+
+}  // namespace yelan::layers

@@ -1,0 +1,159 @@
+#include "layers/simple.h"
+
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+#include "kernels/eltwise.h"
+#include "kernels/vmath.h"
+
+namespace yelan::layers {
+namespace {
+
+void same_shape(const Act& a, const Act& b, const char* what) {
+  if (a.n != b.n || a.c != b.c || a.h != b.h || a.w != b.w)
+    throw std::invalid_argument(std::string(what) + ": shapes differ (" + std::to_string(a.c) + "x" + std::to_string(a.h) +
+                                "x" + std::to_string(a.w) + " vs " + std::to_string(b.c) + "x" + std::to_string(b.h) +
+                                "x" + std::to_string(b.w) + ")");
+}
+
+// Padding lanes must stay zero (sigmoid(0) = 0.5 would break the layout's invariant).
+void zero_padding(const Act& y) {
+  if (y.c % 16 == 0) return;
+  const int last = y.cb() - 1;
+  for (int n = 0; n < y.n; ++n) {
+    float* p = y.data + (std::size_t(n) * y.cb() + last) * y.pixels() * 16;
+    for (std::size_t px = 0; px < y.pixels(); ++px)
+      for (int l = y.c % 16; l < 16; ++l) p[px * 16 + l] = 0.f;
+  }
+}
+
+float* lane(const Act& a, int n, int c, std::size_t px) {
+  return a.data + ((std::size_t(n) * a.cb() + c / 16) * a.pixels() + px) * 16 + c % 16;
+}
+
+}  // namespace
+
+void activation_forward(Activation a, const Act& x, const Act& y) {
+  same_shape(x, y, "activation");
+  const std::size_t n = x.floats();
+  switch (a) {
+    case Activation::relu: kernels::eltwise_kernels().relu(x.data, y.data, n); break;
+    case Activation::sigmoid: kernels::vmath_kernels().sigmoid(x.data, y.data, n); break;
+    case Activation::tanh: kernels::vmath_kernels().tanh(x.data, y.data, n); break;
+  }
+  zero_padding(y);
+}
+
+void activation_backward(Activation a, const Act& y, const Act& dy, const Act& dx) {
+  same_shape(y, dy, "activation backward");
+  const std::size_t n = y.floats();
+  if (a == Activation::relu) {
+    kernels::eltwise_kernels().relu_backward(y.data, dy.data, dx.data, n);
+    return;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const float v = y.data[i];
+    dx.data[i] = dy.data[i] * (a == Activation::sigmoid ? v * (1.f - v) : 1.f - v * v);
+  }
+  zero_padding(dx);
+}
+
+Act MaxPool2d::out_shape(const Act& x) const {
+  const auto s = shape(x);
+  return {nullptr, x.n, x.c, s.oh(), s.ow()};
+}
+
+void MaxPool2d::forward(const Act& x, const Act& y) {
+  const auto s = shape(x);
+  if (!s.valid()) throw std::invalid_argument("maxpool: input " + std::to_string(x.h) + "x" + std::to_string(x.w) + " too small");
+  argmax_.resize(y.floats());
+  kernels::pool_kernels().max_fwd(s, x.data, y.data, argmax_.data());
+}
+
+void MaxPool2d::backward(const Act& x, const Act& dy, const Act& dx) const {
+  if (argmax_.size() != dy.floats()) throw std::logic_error("maxpool: backward without a matching forward");
+  kernels::pool_kernels().max_bwd(shape(x), dy.data, argmax_.data(), dx.data);
+}
+
+void global_avg_pool_forward(const Act& x, const Act& y) {
+  kernels::pool_kernels().avg_global_fwd(x.n * x.cb(), x.pixels(), x.data, y.data);
+}
+void global_avg_pool_backward(const Act& dy, const Act& dx) {
+  kernels::pool_kernels().avg_global_bwd(dx.n * dx.cb(), dx.pixels(), dy.data, dx.data);
+}
+
+Linear::Linear(int in, int out) : weight("weight", {out, in}), bias("bias", {out}), in_(in), out_(out) {}
+
+void Linear::params(const std::string& prefix, ParamList& out) {
+  out.push_back({prefix + "weight", &weight});
+  out.push_back({prefix + "bias", &bias});
+}
+
+void Linear::init(std::uint64_t seed) {
+  init_uniform_fan_in(weight, in_, seed);
+  init_uniform_fan_in(bias, in_, seed ^ 0x9e3779b97f4a7c15ull);
+}
+
+void Linear::forward(const float* x, int n, float* y) const {
+  const auto& k = kernels::eltwise_kernels();
+  for (int b = 0; b < n; ++b)
+    for (int o = 0; o < out_; ++o) y[b * out_ + o] = bias.value[o] + k.dot(x + std::size_t(b) * in_, weight.value.data() + std::size_t(o) * in_, in_);
+}
+
+void Linear::backward(const float* x, const float* dy, int n, float* dx) {
+  const auto& k = kernels::eltwise_kernels();
+  if (dx) std::memset(dx, 0, std::size_t(n) * in_ * sizeof(float));
+  for (int b = 0; b < n; ++b)
+    for (int o = 0; o < out_; ++o) {
+      const float g = dy[b * out_ + o];
+      bias.grad[o] += g;
+      k.axpy(g, x + std::size_t(b) * in_, weight.grad.data() + std::size_t(o) * in_, in_);
+      if (dx) k.axpy(g, weight.value.data() + std::size_t(o) * in_, dx + std::size_t(b) * in_, in_);
+    }
+}
+
+void concat_channels(const Act& a, const Act& b, const Act& y) {
+  if (a.n != b.n || a.h != b.h || a.w != b.w || y.c != a.c + b.c || y.h != a.h || y.w != a.w || y.n != a.n)
+    throw std::invalid_argument("concat: inputs " + std::to_string(a.c) + "x" + std::to_string(a.h) + "x" + std::to_string(a.w) +
+                                " and " + std::to_string(b.c) + "x" + std::to_string(b.h) + "x" + std::to_string(b.w) +
+                                " do not make " + std::to_string(y.c) + " channels");
+  const std::size_t P = a.pixels();
+  for (int n = 0; n < a.n; ++n) {
+    if (a.c % 16 == 0) {  // whole blocks: two memcpys per image
+      std::memcpy(y.data + std::size_t(n) * y.cb() * P * 16, a.data + std::size_t(n) * a.cb() * P * 16, a.cb() * P * 64);
+      std::memcpy(y.data + (std::size_t(n) * y.cb() + a.cb()) * P * 16, b.data + std::size_t(n) * b.cb() * P * 16,
+                  b.cb() * P * 64);
+      continue;
+    }
+    for (std::size_t p = 0; p < P; ++p) {
+      for (int c = 0; c < a.c; ++c) *lane(y, n, c, p) = *lane(a, n, c, p);
+      for (int c = 0; c < b.c; ++c) *lane(y, n, a.c + c, p) = *lane(b, n, c, p);
+    }
+  }
+  zero_padding(y);
+}
+
+void split_channels(const Act& dy, const Act& da, const Act& db) {
+  const std::size_t P = dy.pixels();
+  for (int n = 0; n < dy.n; ++n)
+    for (std::size_t p = 0; p < P; ++p) {
+      for (int c = 0; c < da.c; ++c) *lane(da, n, c, p) = *lane(dy, n, c, p);
+      for (int c = 0; c < db.c; ++c) *lane(db, n, c, p) = *lane(dy, n, da.c + c, p);
+    }
+  zero_padding(da);
+  zero_padding(db);
+}
+
+void add_forward(const Act& a, const Act& b, const Act& y) {
+  same_shape(a, b, "add");
+  same_shape(a, y, "add");
+  kernels::eltwise_kernels().add(a.data, b.data, y.data, a.floats());
+}
+
+void accumulate(const Act& from, const Act& into) {
+  same_shape(from, into, "accumulate");
+  kernels::eltwise_kernels().axpy(1.f, from.data, into.data, from.floats());
+}
+
+}  // namespace yelan::layers

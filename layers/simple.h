@@ -1,0 +1,57 @@
+// Parameter-free layers and Linear: activations, pooling, channel concatenation, sums.
+#pragma once
+#include <cstdint>
+#include <vector>
+
+#include "kernels/pool.h"
+#include "layers/param.h"
+
+namespace yelan::layers {
+
+enum class Activation { relu, sigmoid, tanh };
+void activation_forward(Activation a, const Act& x, const Act& y);
+// dx from dy and the forward's output y (relu: y > 0; sigmoid: y(1-y); tanh: 1-y^2).
+void activation_backward(Activation a, const Act& y, const Act& dy, const Act& dx);
+
+class MaxPool2d {
+ public:
+  MaxPool2d(int k, int stride, int pad) : k_(k), stride_(stride), pad_(pad) {}
+  Act out_shape(const Act& x) const;
+  void forward(const Act& x, const Act& y);
+  void backward(const Act& x, const Act& dy, const Act& dx) const;  // through the last forward's argmax
+
+ private:
+  int k_, stride_, pad_;
+  std::vector<std::int32_t> argmax_;
+  kernels::PoolShape shape(const Act& x) const { return {x.n * x.cb(), x.h, x.w, k_, stride_, pad_}; }
+};
+
+// Mean over all pixels: y is n x cb x 1 x 1 x 16.
+void global_avg_pool_forward(const Act& x, const Act& y);
+void global_avg_pool_backward(const Act& dy, const Act& dx);
+
+// y = x W^T + b on n vectors of `in` features (plain arrays, not blocked).
+class Linear {
+ public:
+  Linear(int in, int out);
+  Param weight, bias;
+  void params(const std::string& prefix, ParamList& out);
+  void init(std::uint64_t seed);
+  void forward(const float* x, int n, float* y) const;
+  void backward(const float* x, const float* dy, int n, float* dx);  // dx may be null
+  int in() const { return in_; }
+  int out() const { return out_; }
+
+ private:
+  int in_, out_;
+};
+
+// Channel concatenation [a, b] -> y and its backward split (any channel counts).
+void concat_channels(const Act& a, const Act& b, const Act& y);
+void split_channels(const Act& dy, const Act& da, const Act& db);
+
+// y = a + b; dy passes unchanged to both inputs, so backward is a copy or an add.
+void add_forward(const Act& a, const Act& b, const Act& y);
+void accumulate(const Act& from, const Act& into);  // into += from
+
+}  // namespace yelan::layers

@@ -1,0 +1,232 @@
+// Every layer's backward against central differences of its own forward (float forward,
+// double sums), on odd channel counts and sizes.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "layers/batchnorm.h"
+#include "layers/conv2d.h"
+#include "layers/simple.h"
+
+using namespace yelan::layers;
+
+namespace {
+
+// A blocked activation with its own storage; padding lanes zero.
+struct Owned {
+  Floats mem;
+  Act act;
+  Owned(int n, int c, int h, int w, unsigned seed = 0) {
+    act = {nullptr, n, c, h, w};
+    mem = Floats(act.floats());
+    act.data = mem.data();
+    if (seed) {
+      std::mt19937 rng(seed);
+      std::uniform_real_distribution<float> u(-1.f, 1.f);
+      for_each_real([&](std::size_t i) { mem[i] = u(rng); });
+    }
+  }
+  explicit Owned(const Act& shape, unsigned seed = 0) : Owned(shape.n, shape.c, shape.h, shape.w, seed) {}
+  template <class F>
+  void for_each_real(F&& f) const {
+    for (int n = 0; n < act.n; ++n)
+      for (int c = 0; c < act.c; ++c)
+        for (std::size_t p = 0; p < act.pixels(); ++p)
+          f(((std::size_t(n) * act.cb() + c / 16) * act.pixels() + p) * 16 + c % 16);
+  }
+};
+
+double dot(const Act& a, const Act& b) {
+  double s = 0;
+  for (std::size_t i = 0; i < a.floats(); ++i) s += double(a.data[i]) * b.data[i];
+  return s;
+}
+
+// Checks d<w, f(x)>/dv for sampled entries v of `values` against `grad`.
+void check_fd(const std::function<double()>& loss, float* values, std::size_t count, const float* grad,
+              std::size_t stride, double h, double tol, const char* what) {
+  for (std::size_t i = 0; i < count; i += stride) {
+    const float saved = values[i];
+    values[i] = saved + float(h);
+    const double lp = loss();
+    values[i] = saved - float(h);
+    const double lm = loss();
+    values[i] = saved;
+    const double fd = (lp - lm) / (2 * h);
+    INFO(what << "[" << i << "] analytic " << grad[i] << " numeric " << fd);
+    REQUIRE(std::abs(grad[i] - fd) <= tol * (1 + std::abs(fd)));
+  }
+}
+
+void check_input_fd(const std::function<double()>& loss, Owned& x, const Act& dx, std::size_t stride, double h,
+                    double tol) {
+  std::size_t k = 0;
+  x.for_each_real([&](std::size_t i) {
+    if (k++ % stride) return;
+    const float saved = x.mem[i];
+    x.mem[i] = saved + float(h);
+    const double lp = loss();
+    x.mem[i] = saved - float(h);
+    const double lm = loss();
+    x.mem[i] = saved;
+    const double fd = (lp - lm) / (2 * h);
+    INFO("dx[" << i << "] analytic " << dx.data[i] << " numeric " << fd);
+    REQUIRE(std::abs(dx.data[i] - fd) <= tol * (1 + std::abs(fd)));
+  });
+}
+
+}  // namespace
+
+TEST_CASE("Conv2d and ConvTranspose2d layers: gradients by finite differences", "[layers][conv]") {
+  struct C { ConvSpec spec; int n, h, w; };
+  for (const C& c : {C{{3, 13, 3, 1, 1, true}, 2, 7, 5}, C{{17, 5, 3, 2, 1, false}, 1, 9, 7},
+                     C{{6, 16, 7, 2, 3, true}, 1, 11, 13}, C{{5, 3, 1, 2, 0, true}, 1, 5, 4},
+                     C{{13, 7, 3, 2, 1, true, true, 0, 1}, 1, 4, 5}, C{{8, 3, 2, 2, 0, true, true}, 2, 3, 3}}) {
+    Conv2d layer(c.spec);
+    layer.init(7);
+    Owned x(c.n, c.spec.in, c.h, c.w, 1);
+    const Act ys = layer.out_shape(x.act);
+    Owned y(ys), w(ys, 2), dx(x.act);
+    auto loss = [&] {
+      layer.weights_changed();
+      layer.forward(x.act, y.act);
+      return dot(w.act, y.act);
+    };
+    loss();
+    layer.backward(x.act, w.act, &dx.act);
+    INFO("conv " << c.spec.in << "->" << c.spec.out << " k" << c.spec.k << " s" << c.spec.stride
+                 << (c.spec.transposed ? " transposed" : ""));
+    check_input_fd(loss, x, dx.act, 3, 1e-2, 2e-3);
+    check_fd(loss, layer.weight.value.data(), layer.weight.numel(), layer.weight.grad.data(), 5, 1e-2, 2e-3, "dw");
+    if (layer.bias) check_fd(loss, layer.bias->value.data(), layer.bias->numel(), layer.bias->grad.data(), 1, 1e-2, 2e-3, "db");
+    // Gradients accumulate: a second backward doubles them.
+    const float g0 = layer.weight.grad[0];
+    layer.backward(x.act, w.act, nullptr);
+    CHECK(layer.weight.grad[0] == Approx(2 * g0).epsilon(1e-5).margin(1e-6));
+  }
+}
+
+TEST_CASE("Winograd layer forward equals the direct forward", "[layers][conv]") {
+  Conv2d layer({20, 24, 3, 1, 1, true});
+  layer.init(3);
+  Owned x(1, 20, 13, 11, 4);
+  Owned y1(layer.out_shape(x.act)), y2(layer.out_shape(x.act));
+  layer.forward(x.act, y1.act, false);
+  layer.forward(x.act, y2.act, true);
+  for (std::size_t i = 0; i < y1.act.floats(); ++i) REQUIRE(y2.mem[i] == Approx(y1.mem[i]).margin(1e-4));
+}
+
+TEST_CASE("BatchNorm2d: training gradients, running statistics, eval mode", "[layers][bn]") {
+  {
+    BatchNorm2d bn(19);
+    for (int i = 0; i < 19; ++i) {
+      bn.weight.value[i] = 0.5f + 0.05f * i;
+      bn.bias.value[i] = 0.1f * (i % 5) - 0.2f;
+    }
+    Owned x(2, 19, 5, 3, 5), y(x.act), w(x.act, 6), dx(x.act);
+    auto loss = [&] {
+      bn.forward(x.act, y.act);
+      return dot(w.act, y.act);
+    };
+    loss();
+    bn.backward(x.act, y.act, w.act, dx.act);
+    check_input_fd(loss, x, dx.act, 2, 1e-2, 3e-3);
+    check_fd(loss, bn.weight.value.data(), 19, bn.weight.grad.data(), 1, 1e-2, 2e-3, "dgamma");
+    check_fd(loss, bn.bias.value.data(), 19, bn.bias.grad.data(), 1, 1e-2, 2e-3, "dbeta");
+  }
+  {
+    // Fused ReLU equals BN followed by ReLU, forward and backward (finite differences do
+    // not suit the kink: shifting one input moves the batch mean of every output).
+    BatchNorm2d fused(19, true), plain(19, false);
+    for (int i = 0; i < 19; ++i) fused.weight.value[i] = plain.weight.value[i] = 0.3f + 0.1f * i;
+    Owned x(2, 19, 5, 3, 5), y1(x.act), y2(x.act), r(x.act), w(x.act, 6), dx1(x.act), dx2(x.act), dr(x.act);
+    fused.forward(x.act, y1.act);
+    plain.forward(x.act, y2.act);
+    activation_forward(Activation::relu, y2.act, r.act);
+    for (std::size_t i = 0; i < x.act.floats(); ++i) REQUIRE(y1.mem[i] == Approx(r.mem[i]).margin(1e-6));
+    fused.backward(x.act, y1.act, w.act, dx1.act);
+    activation_backward(Activation::relu, r.act, w.act, dr.act);
+    plain.backward(x.act, y2.act, dr.act, dx2.act);
+    for (std::size_t i = 0; i < x.act.floats(); ++i) REQUIRE(dx1.mem[i] == Approx(dx2.mem[i]).margin(1e-5));
+    for (int i = 0; i < 19; ++i) REQUIRE(fused.weight.grad[i] == Approx(plain.weight.grad[i]).margin(1e-5));
+  }
+  // Running statistics: momentum 0.1, unbiased variance; eval uses them.
+  BatchNorm2d bn(3);
+  Owned x(1, 3, 2, 2, 0);
+  const float vals[4] = {1, 2, 3, 6};  // mean 3, biased var 3.5, unbiased 14/3
+  for (int p = 0; p < 4; ++p) x.mem[p * 16 + 1] = vals[p];
+  Owned y(x.act);
+  bn.forward(x.act, y.act);
+  CHECK(bn.running_mean.value[1] == Approx(0.3f));
+  CHECK(bn.running_var.value[1] == Approx(0.9f + 0.1f * 14.f / 3.f));
+  CHECK(bn.num_batches_tracked.value[0] == 1.f);
+  CHECK(y.mem[0 * 16 + 1] == Approx((1 - 3) / std::sqrt(3.5 + 1e-5)));
+  bn.training = false;
+  bn.forward(x.act, y.act);
+  CHECK(y.mem[3 * 16 + 1] == Approx((6 - 0.3) / std::sqrt(0.9 + 0.1 * 14.0 / 3 + 1e-5)));
+  CHECK(bn.num_batches_tracked.value[0] == 1.f);  // eval does not count batches
+}
+
+TEST_CASE("activations, pooling, linear and concatenation: gradients by finite differences", "[layers][simple]") {
+  for (Activation a : {Activation::relu, Activation::sigmoid, Activation::tanh}) {
+    Owned x(1, 13, 3, 5, 8), y(x.act), w(x.act, 9), dx(x.act);
+    x.for_each_real([&](std::size_t i) {  // keep inputs off ReLU's kink by more than the step
+      if (std::abs(x.mem[i]) < 0.01f) x.mem[i] = x.mem[i] < 0 ? -0.01f : 0.01f;
+    });
+    auto loss = [&] {
+      activation_forward(a, x.act, y.act);
+      return dot(w.act, y.act);
+    };
+    loss();
+    for (std::size_t i = 13; i < 16; ++i) REQUIRE(y.mem[i] == 0.f);  // padding lanes stay zero
+    activation_backward(a, y.act, w.act, dx.act);
+    check_input_fd(loss, x, dx.act, 1, 1e-3, 2e-3);
+  }
+  {
+    MaxPool2d pool(3, 2, 1);
+    Owned x(2, 7, 9, 6, 10);
+    Owned y(pool.out_shape(x.act)), w(pool.out_shape(x.act), 11), dx(x.act);
+    auto loss = [&] {
+      pool.forward(x.act, y.act);
+      return dot(w.act, y.act);
+    };
+    loss();
+    pool.backward(x.act, w.act, dx.act);
+    check_input_fd(loss, x, dx.act, 1, 1e-4, 1e-3);
+  }
+  {
+    Owned x(2, 21, 4, 3, 12), pooled(2, 21, 1, 1), dpooled(2, 21, 1, 1), dx(x.act);
+    Linear fc(32, 5);  // 21 channels live in 2 blocks of 16 lanes: 32 features, padding zero
+    fc.init(13);
+    std::vector<float> y(10), wv(10), dfeat(64);
+    std::mt19937 rng(14);
+    for (auto& v : wv) v = std::uniform_real_distribution<float>(-1, 1)(rng);
+    auto loss = [&] {
+      global_avg_pool_forward(x.act, pooled.act);
+      fc.forward(pooled.mem.data(), 2, y.data());
+      double s = 0;
+      for (int i = 0; i < 10; ++i) s += double(y[i]) * wv[i];
+      return s;
+    };
+    loss();
+    fc.backward(pooled.mem.data(), wv.data(), 2, dpooled.mem.data());
+    global_avg_pool_backward(dpooled.act, dx.act);
+    check_input_fd(loss, x, dx.act, 3, 1e-2, 2e-3);
+    check_fd(loss, fc.weight.value.data(), fc.weight.numel(), fc.weight.grad.data(), 3, 1e-2, 2e-3, "linear dw");
+    check_fd(loss, fc.bias.value.data(), 5, fc.bias.grad.data(), 1, 1e-2, 2e-3, "linear db");
+  }
+  for (auto [ca, cb] : {std::pair{13, 26}, std::pair{16, 5}, std::pair{3, 3}}) {
+    Owned a(1, ca, 3, 2, 15), b(1, cb, 3, 2, 16), y(1, ca + cb, 3, 2), da(a.act), db(b.act);
+    concat_channels(a.act, b.act, y.act);
+    for (int c = 0; c < ca + cb; ++c) {
+      const Owned& src = c < ca ? a : b;
+      const int sc = c < ca ? c : c - ca;
+      REQUIRE(y.mem[(c / 16) * 6 * 16 + 4 * 16 + c % 16] == src.mem[(sc / 16) * 6 * 16 + 4 * 16 + sc % 16]);
+    }
+    split_channels(y.act, da.act, db.act);
+    for (std::size_t i = 0; i < a.act.floats(); ++i) REQUIRE(da.mem[i] == a.mem[i]);
+    for (std::size_t i = 0; i < b.act.floats(); ++i) REQUIRE(db.mem[i] == b.mem[i]);
+  }
+}
