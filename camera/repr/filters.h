@@ -18,7 +18,9 @@ class HotPixelFilter {
   HotPixelFilter(int width, int height, std::span<const std::pair<int, int>> hot_xy = {});
   // Throws std::invalid_argument for a pixel outside the sensor.
   void add(int x, int y);
-  bool is_hot(int x, int y) const { return hot_[std::size_t(y) * width_ + x] != 0; }
+  bool is_hot(int x, int y) const {  // false outside the sensor
+    return x >= 0 && y >= 0 && x < width_ && y < height_ && hot_[std::size_t(y) * width_ + x] != 0;
+  }
   std::size_t hot_count() const;
   std::vector<std::pair<int, int>> hot_pixels() const;  // row-major order
 

@@ -14,6 +14,8 @@ TEST_CASE("hot pixel filter drops a fixed list of pixels", "[filters]") {
   CHECK(f.hot_count() == 2);
   CHECK(f.is_hot(1, 1));
   CHECK_FALSE(f.is_hot(0, 1));
+  CHECK_FALSE(f.is_hot(5, 0));
+  CHECK_FALSE(f.is_hot(-1, 1));
   std::vector<Event> ev = {{0, 1, 1, 1}, {1, 0, 1, 0}, {2, 4, 0, 1}, {3, 1, 1, 0}, {4, 5, 0, 1}, {5, 2, 2, 1}};
   CHECK(f.apply(ev) == 2);
   REQUIRE(ev.size() == 2);
