@@ -1,0 +1,127 @@
+"""Model configurations: the JSON files in weights_tools/configs/ (stored verbatim in the
+root attribute `config` of a weights file)."""
+import json
+import os
+from dataclasses import dataclass
+
+CONFIG_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
+
+CONVLSTM_MODES = ("bidirectional", "causal")
+
+
+class ConfigError(ValueError):
+    pass
+
+
+def _scaled(base, mult):
+    # Channel counts are rounded to the nearest integer, never below 1.
+    return max(1, int(round(base * mult)))
+
+
+@dataclass(frozen=True)
+class ModelConfig:
+    name: str
+    channels: int          # TORE channels C (2K)
+    sensor_height: int
+    sensor_width: int
+    downscale: int         # network input is (sensor_h // d, sensor_w // d)
+    window: int            # S, frames per window of the pose net
+    mask_width: float      # width multiplier of the U-Net (64..1024 at 1.0)
+    n_masks: int           # N: current + N-1 future masks
+    pose_width: float      # width multiplier of ResNet head and hourglasses (64/128 at 1.0)
+    hidden: int            # ConvLSTM hidden channels
+    stages: int
+    joints: int
+    convlstm: str          # bidirectional | causal
+    raw: dict              # the JSON object this was read from
+
+    @property
+    def height(self):
+        return self.sensor_height // self.downscale
+
+    @property
+    def width(self):
+        return self.sensor_width // self.downscale
+
+    # Channel widths derived from the multipliers.
+    def unet_widths(self):
+        return [_scaled(b, self.mask_width) for b in (64, 128, 256, 512, 1024)]
+
+    def resnet_widths(self):
+        return _scaled(64, self.pose_width), _scaled(128, self.pose_width)
+
+    def hourglass_widths(self):
+        return _scaled(64, self.pose_width), _scaled(128, self.pose_width)
+
+    def to_json(self):
+        return json.dumps(self.raw, sort_keys=True, separators=(",", ":"))
+
+
+def _get(obj, path, key, kind, default=None):
+    if key not in obj:
+        if default is not None:
+            return default
+        raise ConfigError(f"{path}: missing key '{key}'")
+    v = obj[key]
+    if kind is int and (isinstance(v, bool) or not isinstance(v, int)):
+        raise ConfigError(f"{path}.{key}: expected an integer, got {v!r}")
+    if kind is float and (isinstance(v, bool) or not isinstance(v, (int, float))):
+        raise ConfigError(f"{path}.{key}: expected a number, got {v!r}")
+    if kind is str and not isinstance(v, str):
+        raise ConfigError(f"{path}.{key}: expected a string, got {v!r}")
+    return kind(v)
+
+
+def config_from_dict(d, where="config"):
+    if not isinstance(d, dict):
+        raise ConfigError(f"{where}: expected a JSON object")
+    for sec in ("input", "mask", "pose"):
+        if not isinstance(d.get(sec), dict):
+            raise ConfigError(f"{where}: missing object '{sec}'")
+    i, m, p = d["input"], d["mask"], d["pose"]
+    cfg = ModelConfig(
+        name=_get(d, where, "name", str),
+        channels=_get(i, where + ".input", "channels", int),
+        sensor_height=_get(i, where + ".input", "sensor_height", int),
+        sensor_width=_get(i, where + ".input", "sensor_width", int),
+        downscale=_get(i, where + ".input", "downscale", int),
+        window=_get(i, where + ".input", "window", int),
+        mask_width=_get(m, where + ".mask", "width_mult", float),
+        n_masks=_get(m, where + ".mask", "n_masks", int),
+        pose_width=_get(p, where + ".pose", "width_mult", float),
+        hidden=_get(p, where + ".pose", "hidden", int),
+        stages=_get(p, where + ".pose", "stages", int),
+        joints=_get(p, where + ".pose", "joints", int),
+        convlstm=_get(p, where + ".pose", "convlstm", str),
+        raw=d,
+    )
+    checks = [
+        (cfg.channels >= 1, "input.channels must be >= 1"),
+        (cfg.downscale >= 1, "input.downscale must be >= 1"),
+        (cfg.window >= 1, "input.window must be >= 1"),
+        (cfg.mask_width > 0 and cfg.pose_width > 0, "width_mult must be > 0"),
+        (cfg.n_masks >= 1 and cfg.hidden >= 1 and cfg.stages >= 1 and cfg.joints >= 1,
+         "n_masks, hidden, stages and joints must be >= 1"),
+        (cfg.convlstm in CONVLSTM_MODES, f"pose.convlstm must be one of {CONVLSTM_MODES}"),
+        # The U-Net pools 4 times and the pose net divides by 16 before the hourglass.
+        (cfg.height >= 16 and cfg.width >= 16, "input is smaller than 16 x 16 after downscale"),
+    ]
+    for ok, msg in checks:
+        if not ok:
+            raise ConfigError(f"{where}: {msg}")
+    return cfg
+
+
+def load_config(name_or_path):
+    """A config by name (weights_tools/configs/NAME.json) or by path."""
+    path = name_or_path
+    if not os.path.exists(path):
+        path = os.path.join(CONFIG_DIR, name_or_path + ".json")
+    if not os.path.exists(path):
+        raise ConfigError(f"no config '{name_or_path}' (not a file, not in {CONFIG_DIR})")
+    with open(path) as f:
+        try:
+            d = json.load(f)
+        except json.JSONDecodeError as e:
+            raise ConfigError(f"{path}: not valid JSON: {e}") from None
+    return config_from_dict(d, path)
