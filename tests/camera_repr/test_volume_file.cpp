@@ -25,7 +25,7 @@ std::size_t entries(const fs::path& dir) {
 }
 }  // namespace
 
-TEST_CASE("volume file: appended volumes and times read back; attributes are written", "[volume_file]") {
+TEST_CASE("volume file: appended volumes and times read back, with attributes", "[volume_file]") {
   const fs::path dir = temp_dir("ok");
   const std::string path = (dir / "v.h5").string();
   {
@@ -68,7 +68,7 @@ TEST_CASE("volume file: appended volumes and times read back; attributes are wri
   fs::remove_all(dir);
 }
 
-TEST_CASE("volume file: abandoned writers leave nothing; an unwritable path names itself", "[volume_file]") {
+TEST_CASE("volume file: abandoned writers leave nothing, an unwritable path names itself", "[volume_file]") {
   const fs::path dir = temp_dir("abandon");
   const std::string path = (dir / "v.h5").string();
   std::ofstream(path) << "old";  // an existing file stays as it was
