@@ -1,0 +1,96 @@
+// Composite blocks: gradients by finite differences (skipping ReLU kinks), state_dict names.
+#include <catch2/catch.hpp>
+
+#include "layer_fd.h"
+#include "layers/blocks.h"
+
+using namespace yelan::layers;
+using yelan::test::check_fd_kinked;
+using yelan::test::dot;
+using yelan::test::Owned;
+using yelan::test::sample_all;
+using yelan::test::sample_real;
+
+namespace {
+
+// Runs forward/backward of `block` on x and checks dx and a sample of every parameter.
+template <class Block>
+void check_block(Block& block, Owned& x, const Act& out_shape, bool training) {
+  block.set_training(training);
+  Owned w(out_shape, 99), dx(x.act);
+  ParamList params;
+  block.params("", params);
+  auto loss = [&] {
+    block.weights_changed();  // conv weights may have been perturbed
+    const Act y = block.forward(x.act);
+    return dot(w.act, y);
+  };
+  for (auto& p : params)
+    if (p.param->trainable) p.param->grad.zero();
+  loss();
+  block.backward(x.act, w.act, dx.act);
+  check_fd_kinked(loss, x.mem.data(), dx.mem.data(), sample_real(x, 7), 1e-3, 5e-3, "dx");
+  for (auto& p : params) {
+    if (!p.param->trainable) continue;
+    check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
+                    sample_all(p.param->numel(), p.param->numel() > 60 ? 13 : 1), 1e-3, 5e-3, p.key.c_str(), 0.25);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("residual blocks (regular, down, up) and BasicBlocks: gradients", "[layers][blocks]") {
+  for (bool training : {true, false}) {
+    INFO("training " << training);
+    {
+      ResidualBlock b(5, 7, ResidualKind::regular);
+      b.init(1);
+      Owned x(2, 5, 6, 5, 2);
+      check_block(b, x, b.out_shape(x.act), training);
+    }
+    {
+      ResidualBlock b(6, 13, ResidualKind::down);
+      b.init(2);
+      Owned x(1, 6, 9, 7, 3);
+      check_block(b, x, b.out_shape(x.act), training);
+    }
+    {
+      ResidualBlock b(9, 5, ResidualKind::up, 0, 1);  // 5x6 -> 9x12
+      b.init(3);
+      Owned x(1, 9, 5, 6, 4);
+      const Act s = b.out_shape(x.act);
+      REQUIRE(s.h == 9);
+      REQUIRE(s.w == 12);
+      check_block(b, x, s, training);
+    }
+    {
+      BasicBlock b(7, 7, 1);
+      b.init(4);
+      Owned x(2, 7, 5, 5, 5);
+      check_block(b, x, x.act, training);
+    }
+    {
+      BasicBlock b(5, 11, 2);
+      b.init(5);
+      Owned x(1, 5, 9, 8, 6);
+      check_block(b, x, Act{nullptr, 1, 11, 5, 4}, training);
+    }
+  }
+}
+
+TEST_CASE("blocks name their parameters as the reference's state_dict", "[layers][blocks]") {
+  ResidualBlock r(4, 8, ResidualKind::down);
+  ParamList p;
+  r.params("cl_skip_block.", p);
+  std::vector<std::string> keys;
+  for (auto& e : p) keys.push_back(e.key);
+  CHECK(keys.front() == "cl_skip_block.module.0.weight");
+  CHECK(std::find(keys.begin(), keys.end(), "cl_skip_block.module.1.running_var") != keys.end());
+  CHECK(std::find(keys.begin(), keys.end(), "cl_skip_block.module.4.num_batches_tracked") != keys.end());
+  CHECK(keys.back() == "cl_skip_block.shortcut.1.num_batches_tracked");
+  BasicBlock b(4, 8, 2);
+  p.clear();
+  b.params("in_cnn.5.0.", p);
+  CHECK(p.front().key == "in_cnn.5.0.conv1.weight");
+  CHECK(p.back().key == "in_cnn.5.0.downsample.1.num_batches_tracked");
+}
