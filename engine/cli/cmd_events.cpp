@@ -158,6 +158,7 @@ int cmd_convert(const std::vector<std::string>& argv, std::ostream& out, std::os
     auto reader = camera::open_event_file(in);
     auto writer = camera::open_event_writer(dst, reader->info());
     const bool tty = stderr_is_tty(err);
+    int last_percent = -1;
     Summary s;
     std::vector<camera::Event> batch;
     while (true) {
@@ -165,9 +166,13 @@ int cmd_convert(const std::vector<std::string>& argv, std::ostream& out, std::os
       if (reader->read(batch, kBatch) == 0) break;
       writer->write(batch);
       add(s, batch);
-      if (tty && reader->file_size() > 0)
-        progress_bar(err, static_cast<double>(reader->position()) / static_cast<double>(reader->file_size()),
-                     s.events);
+      if (tty && reader->file_size() > 0) {
+        const double f = static_cast<double>(reader->position()) / static_cast<double>(reader->file_size());
+        if (static_cast<int>(f * 100) != last_percent) {  // redraw only when the number changes
+          last_percent = static_cast<int>(f * 100);
+          progress_bar(err, f, s.events);
+        }
+      }
     }
     writer->close();
     if (tty) {
