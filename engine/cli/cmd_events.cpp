@@ -7,6 +7,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "camera/io/aedat_legacy.h"
 #include "camera/io/event_reader.h"
 #include "camera/io/event_writer.h"
 #include "engine/cli/args.h"
@@ -123,14 +124,24 @@ void progress_bar(std::ostream& err, double fraction, std::uint64_t events) {
       << static_cast<int>(fraction * 100 + 0.5) << "%  " << events << " events" << std::flush;
 }
 
+// --camera N picks one of DHP19's four cameras (address & 0xF) in an AEDAT 2.0 file.
+std::unique_ptr<camera::EventReader> open_input(const std::string& path, const Args& args) {
+  const auto cam = args.value("--camera");
+  if (!cam) return camera::open_event_file(path);
+  const int n = args.int_value_or("--camera", 0, 0, 15);
+  if (camera::detect_event_format(path) != "aedat-old")
+    throw UsageError("--camera " + *cam + " applies to AEDAT 2.0 files (DHP19's multiplexed cameras) only");
+  return camera::open_aedat_legacy(path, n);
+}
+
 }  // namespace
 
 int cmd_info(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  Args args("info", argv, {}, {"--json"});
+  Args args("info", argv, {"--camera"}, {"--json"});
   args.expect_positionals(1, 1);
   const std::string& path = args.positionals()[0];
   try {
-    auto reader = camera::open_event_file(path);
+    auto reader = open_input(path, args);
     Summary s;
     std::vector<camera::Event> batch;
     while (true) {
@@ -148,14 +159,14 @@ int cmd_info(const std::vector<std::string>& argv, std::ostream& out, std::ostre
 
 int cmd_convert(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   (void)out;
-  Args args("convert", argv, {}, {});
+  Args args("convert", argv, {"--camera"}, {});
   args.expect_positionals(2, 2);
   const std::string& in = args.positionals()[0];
   const std::string& dst = args.positionals()[1];
   if (camera::writer_format_for(dst).empty())
     throw UsageError("cannot tell the output format of '" + dst + "' (use .yelan.h5, .h5, .aedat4 or .txt)");
   try {
-    auto reader = camera::open_event_file(in);
+    auto reader = open_input(in, args);
     auto writer = camera::open_event_writer(dst, reader->info());
     const bool tty = stderr_is_tty(err);
     int last_percent = -1;

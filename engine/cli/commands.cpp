@@ -19,17 +19,19 @@ const std::vector<Command>& commands() {
        "usage: yelan eval --weights W --data DIR|--sim PRESET [--json OUT]\n",
        nullptr, "evaluation (issue 7)"},
       {"convert", "convert an event file between formats",
-       "usage: yelan convert IN OUT\n"
+       "usage: yelan convert IN OUT [--camera N]\n"
        "Reads any event file `yelan info` reads and writes OUT in the format its extension\n"
        "names: .yelan.h5/.h5 (ours), .aedat4 (AEDAT 4.0, LZ4) or .txt (`t_us x y p` lines).\n"
-       "OUT is written atomically. Progress goes to stderr (a bar on a terminal).\n",
+       "OUT is written atomically. Progress goes to stderr (a bar on a terminal).\n"
+       "--camera N: only camera N (0..3, address & 0xF) of a DHP19 AEDAT 2.0 file.\n",
        cmd_convert, "event readers and writers (issue 5)"},
       {"info", "describe an event file",
-       "usage: yelan info FILE [--json]\n"
+       "usage: yelan info FILE [--json] [--camera N]\n"
        "Format, sensor size, event count, time span, event rate and polarity balance of an\n"
-       "event file: Prophesee RAW (EVT 2.0/2.1/3.0), AEDAT 4.0, HDF5 (ours, DSEC, v2e) or text.\n"
-       "--json prints one object (keys format, width, height, events, on_events, t_first_us,\n"
-       "t_last_us, ...). Bad input exits 2 with `yelan: error: FILE: offset N: problem`.\n",
+       "event file: Prophesee RAW (EVT 2.0/2.1/3.0), AEDAT 4.0/3.1/2.0, HDF5 (ours, DSEC,\n"
+       "v2e), .npy or text. --json prints one object (keys format, width, height, events,\n"
+       "on_events, t_first_us, t_last_us, ...). --camera N: one DHP19 camera (AEDAT 2.0).\n"
+       "Bad input exits 2 with `yelan: error: FILE: offset N: problem`.\n",
        cmd_info, "event readers (issue 5)"},
       {"repr", "TORE volumes and baseline frames from an event file",
        "usage: yelan repr --type tore|tore-baldwin|count|voxel|surface (--at T1,T2,... | --fps F)\n"

@@ -102,3 +102,31 @@ TEST_CASE("info and convert: bad usage and bad input exit 2", "[io][cli]") {
   CHECK(bad.code == 2);
   CHECK_FALSE(std::filesystem::exists(dir.file("out.txt")));
 }
+
+TEST_CASE("info --camera picks one DHP19 camera of an AEDAT 2.0 file", "[io][cli][dhp19]") {
+  ScratchDir dir("clicam");
+  const std::string p = dir.file("dhp19.aedat");
+  auto b = raw_header("#!AER-DAT2.0\r\n# HardwareInterface: DAVIS346\r\n");
+  auto event = [&](unsigned x, unsigned y, unsigned pol, unsigned cam, std::uint32_t ts) {
+    const std::uint32_t a = (y << 22) | (x << 12) | (pol << 11) | cam;
+    for (int i = 3; i >= 0; --i) b.push_back(static_cast<unsigned char>(a >> (8 * i)));
+    for (int i = 3; i >= 0; --i) b.push_back(static_cast<unsigned char>(ts >> (8 * i)));
+  };
+  event(1, 2, 1, 0, 10);
+  event(3, 4, 0, 2, 11);
+  event(5, 6, 1, 2, 12);
+  write_bytes(p, b);
+  Run all = cli({"info", p, "--json"});
+  CHECK(has(all.out, "\"events\": 3"));
+  Run cam2 = cli({"info", p, "--json", "--camera", "2"});
+  CHECK(cam2.code == 0);
+  CHECK(has(cam2.out, "\"format\": \"aedat2\""));
+  CHECK(has(cam2.out, "\"events\": 2"));
+  CHECK(has(cam2.out, "\"t_first_us\": 11"));
+  CHECK(cli({"info", p, "--camera", "16"}).code == 2);
+  const std::string txt = dir.file("e.txt");
+  write_text(txt, "# t_us x y p\n1 2 3 1\n");
+  Run wrong = cli({"info", txt, "--camera", "1"});
+  CHECK(wrong.code == 2);
+  CHECK(has(wrong.err, "applies to AEDAT 2.0 files"));
+}
