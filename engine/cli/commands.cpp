@@ -60,8 +60,18 @@ const std::vector<Command>& commands() {
        "Lists attached DAVIS346/DVXplorer cameras: model, USB bus, address, serial.\n",
        cmd_devices, "the libusb driver (issue 5)"},
       {"bench", "benchmarks: kernels, events, run, early-exit",
-       "usage: yelan bench kernels|events|run|early-exit [--quick] [--json]\n",
-       nullptr, "the kernel benchmarks (issue 3)"},
+       "usage: yelan bench kernels [--quick] [--json] [--isa-list avx2,avx512] [--threads-list 1,2]\n"
+       "                          [--reps N] [--only NAME] [--chart FILE.svg]\n"
+       "       yelan bench events [--json]\n"
+       "\n"
+       "kernels: every convolution shape of the networks (forward, backward-data,\n"
+       "backward-weights) per ISA and thread count, with GFLOP/s and % of the FMA peak\n"
+       "measured in the same run; memory-bound kernels (BN+ReLU, pooling, LSTM update,\n"
+       "softmax) against a memcpy of the same bytes; oneDNN and PyTorch 1.13 on the same\n"
+       "shapes when installed (scripts/setup-debian --reference).\n"
+       "--quick: the 3x3/1 shapes, best ISA, 1 thread. --only NAME: shapes whose name\n"
+       "contains NAME ('memory', 'convlstm.step' for those groups).\n",
+       cmd_bench, ""},
       {"model", "network summaries and forward passes",
        "usage: yelan model summary --config X [--json]\n"
        "       yelan model forward --weights W --input IN.h5 --output OUT.h5\n",

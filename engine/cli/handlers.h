@@ -18,4 +18,7 @@ int cmd_convert(const std::vector<std::string>& args, std::ostream& out, std::os
 // engine/cli/cmd_repr.cpp: representation volumes from event files (camera/repr).
 int cmd_repr(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// engine/cli/cmd_bench.cpp: benchmark suites (benchmarks/).
+int cmd_bench(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace yelan::cli

@@ -1,0 +1,102 @@
+#include "engine/model_config.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#ifndef YELAN_SOURCE_DIR
+#define YELAN_SOURCE_DIR "."
+#endif
+
+namespace yelan {
+namespace {
+
+using nlohmann::json;
+
+const json& section(const json& d, const char* key, const std::string& where) {
+  if (!d.contains(key) || !d[key].is_object()) throw ConfigError(where + ": missing object '" + key + "'");
+  return d[key];
+}
+
+int get_int(const json& o, const std::string& path, const char* key) {
+  if (!o.contains(key)) throw ConfigError(path + ": missing key '" + key + "'");
+  const json& v = o[key];
+  if (!v.is_number_integer()) throw ConfigError(path + "." + key + ": expected an integer, got " + v.dump());
+  return v.get<int>();
+}
+
+double get_num(const json& o, const std::string& path, const char* key) {
+  if (!o.contains(key)) throw ConfigError(path + ": missing key '" + key + "'");
+  const json& v = o[key];
+  if (!v.is_number()) throw ConfigError(path + "." + key + ": expected a number, got " + v.dump());
+  return v.get<double>();
+}
+
+std::string get_str(const json& o, const std::string& path, const char* key) {
+  if (!o.contains(key)) throw ConfigError(path + ": missing key '" + key + "'");
+  if (!o[key].is_string()) throw ConfigError(path + "." + key + ": expected a string, got " + o[key].dump());
+  return o[key].get<std::string>();
+}
+
+}  // namespace
+
+int ModelConfig::scaled(int base, double mult) {
+  return std::max(1, int(std::nearbyint(base * mult)));  // Python's round(): half to even
+}
+
+ModelConfig parse_model_config(const std::string& text, const std::string& where) {
+  json d;
+  try {
+    d = json::parse(text);
+  } catch (const json::parse_error& e) {
+    throw ConfigError(where + ": not valid JSON: " + e.what());
+  }
+  if (!d.is_object()) throw ConfigError(where + ": expected a JSON object");
+  const json& i = section(d, "input", where);
+  const json& m = section(d, "mask", where);
+  const json& p = section(d, "pose", where);
+  ModelConfig c;
+  c.json = text;
+  c.name = get_str(d, where, "name");
+  c.channels = get_int(i, where + ".input", "channels");
+  c.sensor_height = get_int(i, where + ".input", "sensor_height");
+  c.sensor_width = get_int(i, where + ".input", "sensor_width");
+  c.downscale = get_int(i, where + ".input", "downscale");
+  c.window = get_int(i, where + ".input", "window");
+  c.mask_width = get_num(m, where + ".mask", "width_mult");
+  c.n_masks = get_int(m, where + ".mask", "n_masks");
+  c.pose_width = get_num(p, where + ".pose", "width_mult");
+  c.hidden = get_int(p, where + ".pose", "hidden");
+  c.stages = get_int(p, where + ".pose", "stages");
+  c.joints = get_int(p, where + ".pose", "joints");
+  const std::string mode = get_str(p, where + ".pose", "convlstm");
+  if (mode != "bidirectional" && mode != "causal")
+    throw ConfigError(where + ": pose.convlstm must be bidirectional or causal, got '" + mode + "'");
+  c.bidirectional = mode == "bidirectional";
+  const struct { bool ok; const char* msg; } checks[] = {
+      {c.channels >= 1, "input.channels must be >= 1"},
+      {c.downscale >= 1, "input.downscale must be >= 1"},
+      {c.window >= 1, "input.window must be >= 1"},
+      {c.mask_width > 0 && c.pose_width > 0, "width_mult must be > 0"},
+      {c.n_masks >= 1 && c.hidden >= 1 && c.stages >= 1 && c.joints >= 1,
+       "n_masks, hidden, stages and joints must be >= 1"},
+      {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},
+  };
+  for (const auto& ch : checks)
+    if (!ch.ok) throw ConfigError(where + ": " + ch.msg);
+  return c;
+}
+
+ModelConfig load_model_config(const std::string& name_or_path) {
+  std::string path = name_or_path;
+  if (!std::filesystem::exists(path)) path = std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/" + name_or_path + ".json";
+  std::ifstream f(path);
+  if (!f) throw ConfigError("no config '" + name_or_path + "' (not a file, not in weights_tools/configs/)");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return parse_model_config(ss.str(), path);
+}
+
+}  // namespace yelan

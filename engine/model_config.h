@@ -1,0 +1,39 @@
+// Model configurations (weights_tools/configs/*.json; stored verbatim in a weights file's
+// `config` attribute). Mirrors weights_tools/reference/config.py: same keys, same checks,
+// same channel rounding (round half to even, never below 1).
+#pragma once
+#include <stdexcept>
+#include <string>
+
+namespace yelan {
+
+struct ConfigError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct ModelConfig {
+  std::string name;
+  int channels = 6, sensor_height = 260, sensor_width = 346, downscale = 1, window = 16;
+  double mask_width = 1.0;
+  int n_masks = 16;
+  double pose_width = 1.0;
+  int hidden = 128, stages = 3, joints = 13;
+  bool bidirectional = true;
+  std::string json;  // the source text
+
+  int height() const { return sensor_height / downscale; }
+  int width() const { return sensor_width / downscale; }
+  static int scaled(int base, double mult);
+  int unet_width(int level) const { return scaled(64 << level, mask_width); }
+  int resnet_c64() const { return scaled(64, pose_width); }
+  int resnet_mid() const { return scaled(128, pose_width); }
+  int hourglass_lo() const { return scaled(64, pose_width); }
+  int hourglass_hi() const { return scaled(128, pose_width); }
+};
+
+// Throws ConfigError naming the source and the offending key.
+ModelConfig parse_model_config(const std::string& json_text, const std::string& where);
+// A name (weights_tools/configs/NAME.json under the source tree) or a path.
+ModelConfig load_model_config(const std::string& name_or_path);
+
+}  // namespace yelan

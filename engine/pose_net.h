@@ -1,0 +1,62 @@
+// Stage 2 (SPEC 5): ResNet34 head -> window ConvLSTM -> skip block -> stacked hourglasses
+// giving xy/zy/xz marginal heatmaps per stage -> DSNT joints from the last stage. The
+// state_dict keys are the reference's (weights_tools/README.md): in_cnn.*, cl.*,
+// cl_skip_block.*, {xy,zy,xz}_hm_cnns.<stage>.*, hm_combiners.<stage-1>.*.
+#pragma once
+#include <array>
+#include <memory>
+#include <vector>
+
+#include "engine/model_config.h"
+#include "layers/blocks.h"
+#include "layers/convlstm.h"
+#include "layers/hourglass.h"
+
+namespace yelan {
+
+class PoseNet {
+ public:
+  explicit PoseNet(const ModelConfig& cfg);
+  void params(layers::ParamList& out);
+  void init(std::uint64_t seed);
+  void set_training(bool on);
+  void weights_changed();
+
+  // x: B windows of S frames (frame t of window b is image b*S + t), cfg.channels x H x W.
+  void forward(const layers::Act& x, int frames_per_window);
+  // Probability maps of stage t, plane p (0 xy, 1 zy, 2 xz), and normalised joints
+  // (n x J x 3) of the last stage, valid until the next forward.
+  const layers::Act& heatmap(int stage, int plane) const { return probs_[stage][plane]; }
+  const std::vector<float>& joints() const { return joints_; }
+  int mid_h() const { return mid_h_; }
+  int mid_w() const { return mid_w_; }
+
+  // dheat[t][p]: dL/d probability map (data may be null: no direct loss there); djoints:
+  // dL/djoints (may be null). Adds every parameter's gradient.
+  void backward(const layers::Act& x, const std::vector<std::array<layers::Act, 3>>& dheat, const float* djoints);
+
+ private:
+  ModelConfig cfg_;
+  int mid_h_, mid_w_, S_ = 1;
+  layers::Conv2d conv1_;
+  layers::BatchNorm2d bn1_;
+  layers::MaxPool2d pool_;
+  std::vector<std::unique_ptr<layers::BasicBlock>> resnet_;
+  layers::WindowConvLSTM cl_;
+  layers::ResidualBlock skip_;
+  std::vector<std::array<std::unique_ptr<layers::HourglassStage>, 3>> hourglass_;
+  std::vector<std::unique_ptr<layers::ResidualBlock>> combiners_;
+
+  // activations of the last forward
+  layers::ActBuf c1_buf_, b1_buf_, p_buf_, cat_buf_, hmcat_buf_[8], inp_buf_[8], prob_buf_[8][3];
+  layers::Act c1_, b1_, pooled_, cat_;
+  std::vector<layers::Act> res_in_;  // input of each BasicBlock, then the head's output
+  layers::Act feats_, cl_out_;
+  std::vector<layers::Act> inp_, hmcat_;
+  std::vector<std::array<layers::Act, 3>> logits_, probs_;
+  std::vector<float> joints_;
+  // gradient scratch
+  layers::ActBuf g_inp_, g_prob_, g_logit_, g_hg_, g_cat_, g_extra_[8][3], g_feat_a_, g_feat_b_, g_cl_, g_c1_, g_b1_;
+};
+
+}  // namespace yelan

@@ -1,0 +1,112 @@
+#include "layers/hourglass.h"
+
+#include <vector>
+
+#include "kernels/heatmap.h"
+
+namespace yelan::layers {
+
+HourglassStage::HourglassStage(int in, int joints, int lo, int hi, int mid_h, int mid_w) {
+  using K = ResidualKind;
+  auto add = [&](int a, int b, K k, int oph = 0, int opw = 0) {
+    blocks_.push_back(std::make_unique<ResidualBlock>(a, b, k, oph, opw));
+  };
+  add(in, lo, K::regular);
+  add(lo, lo, K::regular);
+  add(lo, hi, K::down);
+  add(hi, hi, K::regular);
+  add(hi, hi, K::regular);
+  add(hi, hi, K::regular);
+  add(hi, hi, K::regular);
+  add(hi, lo, K::up, mid_h % 2 == 0, mid_w % 2 == 0);
+  add(lo, lo, K::regular);
+  add(lo, joints, K::regular);
+}
+
+void HourglassStage::params(const std::string& prefix, ParamList& out) {
+  for (std::size_t i = 0; i < blocks_.size(); ++i)
+    blocks_[i]->params(prefix + (i < 5 ? "down_layers." : "up_layers.") + std::to_string(i % 5) + ".", out);
+}
+
+void HourglassStage::init(std::uint64_t seed) {
+  for (std::size_t i = 0; i < blocks_.size(); ++i) blocks_[i]->init(seed * 16 + i);
+}
+void HourglassStage::set_training(bool on) {
+  for (auto& b : blocks_) b->set_training(on);
+}
+void HourglassStage::weights_changed() {
+  for (auto& b : blocks_) b->weights_changed();
+}
+
+Act HourglassStage::forward(const Act& x) {
+  inputs_.assign(1, x);
+  Act a = x;
+  for (auto& b : blocks_) {
+    a = b->forward(a);
+    inputs_.push_back(a);
+  }
+  inputs_.pop_back();  // inputs_[i] is block i's input
+  return a;
+}
+
+void HourglassStage::backward(const Act& x, const Act& dy, const Act& dx) {
+  Act g = dy;
+  for (int i = int(blocks_.size()) - 1; i >= 0; --i) {
+    const Act& in = inputs_[i];
+    const Act d = i == 0 ? dx : (i % 2 ? grad_a_ : grad_b_).like(in);
+    blocks_[i]->backward(in, g, d);
+    g = d;
+  }
+}
+
+void flat_softmax_forward(const Act& logits, const Act& probs) {
+  kernels::heatmap_kernels().softmax_fwd(logits.n * logits.cb(), logits.pixels(), logits.data, probs.data);
+  // padding lanes would each become a uniform 1/(h w): keep them zero
+  if (probs.c % 16)
+    for (int n = 0; n < probs.n; ++n) {
+      float* p = probs.data + (std::size_t(n) * probs.cb() + probs.cb() - 1) * probs.pixels() * 16;
+      for (std::size_t px = 0; px < probs.pixels(); ++px)
+        for (int l = probs.c % 16; l < 16; ++l) p[px * 16 + l] = 0.f;
+    }
+}
+
+void flat_softmax_backward(const Act& probs, const Act& dprobs, const Act& dlogits) {
+  kernels::heatmap_kernels().softmax_bwd(probs.n * probs.cb(), probs.pixels(), probs.data, dprobs.data, dlogits.data);
+}
+
+void dsnt_joints_forward(const Act& xy, const Act& zy, const Act& xz, float* joints) {
+  const int planes = xy.n * xy.cb(), J = xy.c;
+  std::vector<float> a(planes * 32), b(planes * 32), c(planes * 32);
+  const auto& k = kernels::heatmap_kernels();
+  k.dsnt_fwd(planes, xy.h, xy.w, xy.data, a.data());
+  k.dsnt_fwd(planes, zy.h, zy.w, zy.data, b.data());
+  k.dsnt_fwd(planes, xz.h, xz.w, xz.data, c.data());
+  for (int n = 0; n < xy.n; ++n)
+    for (int j = 0; j < J; ++j) {
+      const int p = n * xy.cb() + j / 16, l = j % 16;
+      float* o = joints + (std::size_t(n) * J + j) * 3;
+      o[0] = a[(p * 2 + 0) * 16 + l];
+      o[1] = a[(p * 2 + 1) * 16 + l];
+      o[2] = 0.5f * (b[(p * 2 + 0) * 16 + l] + c[(p * 2 + 1) * 16 + l]);
+    }
+}
+
+void dsnt_joints_backward(const float* dj, const Act& dxy, const Act& dzy, const Act& dxz) {
+  const int planes = dxy.n * dxy.cb(), J = dxy.c;
+  std::vector<float> a(planes * 32, 0.f), b(planes * 32, 0.f), c(planes * 32, 0.f);
+  for (int n = 0; n < dxy.n; ++n)
+    for (int j = 0; j < J; ++j) {
+      const int p = n * dxy.cb() + j / 16, l = j % 16;
+      const float* g = dj + (std::size_t(n) * J + j) * 3;
+      a[(p * 2 + 0) * 16 + l] = g[0];
+      a[(p * 2 + 1) * 16 + l] = g[1];
+      b[(p * 2 + 0) * 16 + l] = 0.5f * g[2];
+      c[(p * 2 + 1) * 16 + l] = 0.5f * g[2];
+    }
+  const auto& k = kernels::heatmap_kernels();
+  k.dsnt_bwd(planes, dxy.h, dxy.w, a.data(), dxy.data);
+  k.dsnt_bwd(planes, dzy.h, dzy.w, b.data(), dzy.data);
+  k.dsnt_bwd(planes, dxz.h, dxz.w, c.data(), dxz.data);
+}
+
+}  // namespace yelan::layers

@@ -1,0 +1,37 @@
+// One hourglass stage of one plane (SPEC 5): down_layers = regular(in->lo), regular(lo),
+// down(lo->hi), regular(hi), regular(hi); up_layers = regular(hi), regular(hi),
+// up(hi->lo, output_padding (H%2==0, W%2==0) of the mid size), regular(lo), regular(lo->J).
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "layers/blocks.h"
+
+namespace yelan::layers {
+
+class HourglassStage {
+ public:
+  HourglassStage(int in, int joints, int lo, int hi, int mid_h, int mid_w);
+  void params(const std::string& prefix, ParamList& out);
+  void init(std::uint64_t seed);
+  void set_training(bool on);
+  void weights_changed();
+  Act forward(const Act& x);  // -> joints x mid_h x mid_w logits
+  void backward(const Act& x, const Act& dy, const Act& dx);
+
+ private:
+  std::vector<std::unique_ptr<ResidualBlock>> blocks_;  // 5 down then 5 up
+  std::vector<Act> inputs_;                             // each block's input in the last forward
+  ActBuf grad_a_, grad_b_;
+};
+
+// Flat spatial softmax of every map, and DSNT read-out of 3D joints from the xy, zy, xz
+// marginals (x, y from xy; z = (zy's width coordinate + xz's height coordinate) / 2).
+void flat_softmax_forward(const Act& logits, const Act& probs);
+void flat_softmax_backward(const Act& probs, const Act& dprobs, const Act& dlogits);
+// joints: n x J x 3 floats (plain)
+void dsnt_joints_forward(const Act& xy, const Act& zy, const Act& xz, float* joints);
+// Gradients of the three probability maps from dL/djoints (overwrites them).
+void dsnt_joints_backward(const float* djoints, const Act& dxy, const Act& dzy, const Act& dxz);
+
+}  // namespace yelan::layers

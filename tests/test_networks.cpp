@@ -1,0 +1,139 @@
+// The networks built from configs: parameter names and counts against the PyTorch
+// reference's manifests (weights_tools/configs/<name>.manifest.json), a forward pass's
+// shapes and invariants, and gradients by finite differences on the tiny config.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "engine/model_config.h"
+#include "engine/pose_net.h"
+#include "layer_fd.h"
+
+using namespace yelan;
+
+namespace {
+
+std::string source_file(const std::string& rel) { return std::string(YELAN_SOURCE_DIR) + "/" + rel; }
+
+// name -> shape of group `pose` or `mask` in the reference's manifest
+std::map<std::string, std::vector<std::int64_t>> manifest(const std::string& config, const std::string& group) {
+  std::ifstream f(source_file("weights_tools/configs/" + config + ".manifest.json"));
+  REQUIRE(f);
+  const auto j = nlohmann::json::parse(f);
+  std::map<std::string, std::vector<std::int64_t>> out;
+  const auto& g = j.at("groups").at(group);
+  if (g.is_object()) {
+    for (auto it = g.begin(); it != g.end(); ++it) out[it.key()] = it.value().get<std::vector<std::int64_t>>();
+  } else {
+    for (const auto& e : g) out[e.at("name").get<std::string>()] = e.at("shape").get<std::vector<std::int64_t>>();
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("pose net parameters match the reference's names, shapes and count", "[networks][pose]") {
+  for (const char* name : {"paper", "small", "tiny"}) {
+    INFO("config " << name);
+    const ModelConfig cfg = load_model_config(name);
+    PoseNet net(cfg);
+    layers::ParamList params;
+    net.params(params);
+    const auto want = manifest(name, "pose");
+    std::size_t trainable = 0;
+    std::map<std::string, std::vector<std::int64_t>> got;
+    for (auto& p : params) {
+      got[p.key] = p.param->shape;
+      if (p.param->trainable) trainable += p.param->numel();
+    }
+    for (auto& [k, shape] : want) {
+      INFO("reference key " << k);
+      REQUIRE(got.count(k));
+      CHECK(got[k] == shape);
+    }
+    for (auto& [k, shape] : got) {
+      INFO("our key " << k);
+      CHECK(want.count(k));
+    }
+    if (std::string(name) == "paper") CHECK(trainable == 20390199);
+  }
+}
+
+TEST_CASE("model configs are validated with the file and key named", "[networks][config]") {
+  CHECK_THROWS_WITH(parse_model_config("{", "x.json"), Catch::Contains("x.json: not valid JSON"));
+  CHECK_THROWS_WITH(parse_model_config("{\"name\":\"a\"}", "x.json"), Catch::Contains("missing object 'input'"));
+  const std::string ok =
+      R"({"name":"t","input":{"channels":6,"sensor_height":40,"sensor_width":40,"downscale":1,"window":2},)"
+      R"("mask":{"width_mult":0.5,"n_masks":4},"pose":{"width_mult":0.5,"hidden":8,"stages":1,"joints":13,"convlstm":"causal"}})";
+  const ModelConfig c = parse_model_config(ok, "x.json");
+  CHECK(c.resnet_mid() == 64);
+  CHECK_FALSE(c.bidirectional);
+  std::string bad = ok;
+  bad.replace(bad.find("causal"), 6, "sideways");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("pose.convlstm"));
+  bad = ok;
+  bad.replace(bad.find("\"window\":2"), 10, "\"window\":\"2\"");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("x.json.input.window: expected an integer"));
+  CHECK(ModelConfig::scaled(64, 0.125) == 8);
+  CHECK(ModelConfig::scaled(10, 0.25) == 2);  // 2.5 rounds half to even, as Python's round()
+  CHECK(ModelConfig::scaled(64, 0.001) == 1);
+}
+
+TEST_CASE("pose net forward: heatmaps are distributions, joints inside [-1, 1]", "[networks][pose]") {
+  const ModelConfig cfg = load_model_config("tiny");
+  PoseNet net(cfg);
+  net.init(1);
+  net.set_training(false);
+  yelan::test::Owned x(2 * cfg.window, cfg.channels, cfg.height(), cfg.width(), 3);
+  net.forward(x.act, cfg.window);
+  for (int t = 0; t < cfg.stages; ++t)
+    for (int p = 0; p < 3; ++p) {
+      const layers::Act& h = net.heatmap(t, p);
+      REQUIRE(h.c == cfg.joints);
+      REQUIRE(h.h == net.mid_h());
+      for (int n = 0; n < h.n; ++n)
+        for (int j = 0; j < h.c; ++j) {
+          double s = 0;
+          for (std::size_t px = 0; px < h.pixels(); ++px) s += h.data[((std::size_t(n) * h.cb() + j / 16) * h.pixels() + px) * 16 + j % 16];
+          REQUIRE(s == Approx(1.0).epsilon(1e-5));
+        }
+    }
+  REQUIRE(net.joints().size() == std::size_t(2 * cfg.window) * cfg.joints * 3);
+  for (float v : net.joints()) REQUIRE(std::abs(v) < 1.f);
+}
+
+TEST_CASE("pose net backward: gradients by finite differences (tiny config)", "[networks][pose]") {
+  const ModelConfig cfg = load_model_config("tiny");
+  PoseNet net(cfg);
+  net.init(2);
+  net.set_training(false);  // fixed BN statistics: the loss is a function of each weight alone
+  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 4);
+  std::vector<float> wj(std::size_t(cfg.window) * cfg.joints * 3);
+  for (std::size_t i = 0; i < wj.size(); ++i) wj[i] = std::sin(0.7 * i);
+  layers::ParamList params;
+  net.params(params);
+  auto loss = [&] {
+    net.weights_changed();
+    net.forward(x.act, cfg.window);
+    double s = 0;
+    for (std::size_t i = 0; i < wj.size(); ++i) s += double(wj[i]) * net.joints()[i];
+    return s;
+  };
+  for (auto& p : params)
+    if (p.param->trainable) p.param->grad.zero();
+  loss();
+  net.backward(x.act, {}, wj.data());
+  int checked = 0;
+  for (auto& p : params) {
+    if (!p.param->trainable || p.param->shape.size() != 4) continue;  // conv weights
+    if (checked++ % 23) continue;                                     // a spread sample of layers
+    INFO(p.key);
+    yelan::test::check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
+                                 yelan::test::sample_all(p.param->numel(), p.param->numel() / 2 + 1), 1e-2, 1e-2,
+                                 p.key.c_str(), 0.0);
+  }
+}
