@@ -100,7 +100,7 @@ TEST_CASE("AEDAT 3.1 polarity packets: valid bit, overflow, other packets skippe
   CHECK_THROWS_WITH(read_all(*c), Catch::Contains("truncated packet: needs 8 bytes, 5 remain"));
 }
 
-TEST_CASE(".npy structured arrays with mixed widths and byte orders", "[io][npy]") {
+TEST_CASE("NumPy .npy structured arrays with mixed widths and byte orders", "[io][npy]") {
   ScratchDir dir("npy");
   std::string dict = "{'descr': [('t', '<i8'), ('x', '<i2'), ('y', '>u2'), ('p', '|u1'), ('extra', '<f4')], "
                      "'fortran_order': False, 'shape': (3,), }";

@@ -6,6 +6,8 @@
 #include <cstring>
 #include <random>
 
+#include <zstd.h>
+
 #include "camera/io/compression.h"
 #include "camera/io/event_writer.h"
 #include "camera/io/flatbuf.h"
@@ -221,4 +223,58 @@ TEST_CASE("AEDAT 4.0 writer emits a data table the header points to", "[io][aeda
     CHECK(flat::field_i64(d, 3, -1) == ev[want_first[i]].t);
     CHECK(flat::field_i64(d, 4, -1) == ev[want_first[i] + static_cast<std::size_t>(want_count[i]) - 1].t);
   }
+}
+
+TEST_CASE("AEDAT 4.0 with Zstd packets reads the same events", "[io][aedat4][zstd]") {
+  // DV can write Zstd (compression 3/4); rebuild one of our LZ4 files packet by packet.
+  ScratchDir dir("zstd");
+  const auto ev = synthetic_stream(10'000, 64, 48, 5'000, 21);
+  const std::string lz4_path = dir.file("l.aedat4"), zstd_path = dir.file("z.aedat4");
+  write_all(lz4_path, {"", 64, 48, {}, {}}, ev, 3000);
+  const auto b = read_bytes(lz4_path);
+  std::uint32_t hdr = 0;
+  std::int64_t table = 0;
+  std::memcpy(&hdr, b.data() + 14, 4);
+  std::memcpy(&table, b.data() + 46, 8);
+  std::vector<unsigned char> out(b.begin(), b.begin() + 18 + hdr);
+  const std::int32_t zstd = 3;
+  const std::int64_t none = -1;
+  std::memcpy(out.data() + 42, &zstd, 4);  // IOHeader.compression
+  std::memcpy(out.data() + 46, &none, 8);  // no data table
+  int packets = 0;
+  std::size_t last_packet = 0;
+  for (std::size_t at = 18 + hdr; at < static_cast<std::size_t>(table); ++packets) {
+    std::int32_t stream = 0, size = 0;
+    std::memcpy(&stream, b.data() + at, 4);
+    std::memcpy(&size, b.data() + at + 4, 4);
+    std::vector<unsigned char> plain;
+    std::string problem;
+    REQUIRE(yelan::camera::decompress(yelan::camera::Codec::lz4, b.data() + at + 8, static_cast<std::size_t>(size),
+                                      1 << 24, plain, problem));
+    std::vector<unsigned char> z(ZSTD_compressBound(plain.size()));
+    const std::size_t zn = ZSTD_compress(z.data(), z.size(), plain.data(), plain.size(), 3);
+    REQUIRE_FALSE(ZSTD_isError(zn));
+    const std::int32_t zsize = static_cast<std::int32_t>(zn);
+    last_packet = out.size();
+    out.insert(out.end(), b.begin() + static_cast<std::ptrdiff_t>(at), b.begin() + static_cast<std::ptrdiff_t>(at + 4));
+    out.insert(out.end(), reinterpret_cast<const unsigned char*>(&zsize), reinterpret_cast<const unsigned char*>(&zsize) + 4);
+    out.insert(out.end(), z.begin(), z.begin() + static_cast<std::ptrdiff_t>(zn));
+    at += 8 + static_cast<std::size_t>(size);
+  }
+  CHECK(packets == 2);  // 10002 events, 8192 per packet
+  write_bytes(zstd_path, out);
+  auto r = yelan::camera::open_event_file(zstd_path);
+  CHECK_FALSE(r->fast_seek());
+  CHECK(read_all(*r) == ev);
+
+  // A Zstd frame cut short (the packet and file one byte shorter) is an error at its payload.
+  std::int32_t last_size = 0;
+  std::memcpy(&last_size, out.data() + last_packet + 4, 4);
+  --last_size;
+  std::memcpy(out.data() + last_packet + 4, &last_size, 4);
+  out.pop_back();
+  write_bytes(zstd_path, out);
+  r = yelan::camera::open_event_file(zstd_path);
+  CHECK_THROWS_WITH(read_all(*r), zstd_path + ": offset " + std::to_string(last_packet + 8) +
+                                      ": Zstd packet ends before its frame does");
 }
