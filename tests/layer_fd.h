@@ -44,7 +44,8 @@ inline double dot(const layers::Act& a, const layers::Act& b) {
 // Checks grad[i] = dL/dv[i] for every `stride`-th entry of v. Samples whose quotient
 // changes between steps h and h/2 crossed a kink and are skipped; at least `min_fraction`
 // must count (a BN shift moves a whole channel, so its samples cross kinks most often).
-inline void check_fd_kinked(const std::function<double()>& loss, float* v, const float* grad,
+// Returns how many samples were checked.
+inline int check_fd_kinked(const std::function<double()>& loss, float* v, const float* grad,
                             const std::vector<std::size_t>& indices, double h, double tol, const char* what,
                             double min_fraction = 0.5) {
   int checked = 0, skipped = 0;
@@ -70,6 +71,7 @@ inline void check_fd_kinked(const std::function<double()>& loss, float* v, const
   INFO(what << ": " << checked << " checked, " << skipped << " skipped at kinks");
   REQUIRE(checked >= min_fraction * (checked + skipped));
   if (min_fraction > 0) REQUIRE(checked > 0);
+  return checked;
 }
 
 inline std::vector<std::size_t> sample_real(const Owned& a, std::size_t stride) {

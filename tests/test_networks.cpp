@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "engine/mask_net.h"
 #include "engine/model_config.h"
 #include "engine/pose_net.h"
 #include "layer_fd.h"
@@ -127,13 +128,71 @@ TEST_CASE("pose net backward: gradients by finite differences (tiny config)", "[
     if (p.param->trainable) p.param->grad.zero();
   loss();
   net.backward(x.act, {}, wj.data());
-  int checked = 0;
+  int layer = 0, checked = 0;
   for (auto& p : params) {
     if (!p.param->trainable || p.param->shape.size() != 4) continue;  // conv weights
-    if (checked++ % 23) continue;                                     // a spread sample of layers
+    if (layer++ % 23) continue;                                       // a spread sample of layers
     INFO(p.key);
-    yelan::test::check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
+    checked += yelan::test::check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
                                  yelan::test::sample_all(p.param->numel(), p.param->numel() / 2 + 1), 1e-2, 1e-2,
                                  p.key.c_str(), 0.0);
   }
+  CHECK(checked >= 10);  // most samples avoid ReLU kinks
+}
+
+TEST_CASE("mask net parameters match the reference's names and shapes", "[networks][mask]") {
+  for (const char* name : {"paper", "small", "tiny"}) {
+    INFO("config " << name);
+    MaskNet net(load_model_config(name));
+    layers::ParamList params;
+    net.params(params);
+    const auto want = manifest(name, "mask");
+    std::map<std::string, std::vector<std::int64_t>> got;
+    for (auto& p : params) got[p.key] = p.param->shape;
+    CHECK(got.size() == want.size());
+    for (auto& [k, shape] : want) {
+      INFO("reference key " << k);
+      REQUIRE(got.count(k));
+      CHECK(got[k] == shape);
+    }
+  }
+}
+
+TEST_CASE("mask net forward shapes, scores in (0, 1), gradients by finite differences", "[networks][mask]") {
+  const ModelConfig cfg = load_model_config("tiny");
+  MaskNet net(cfg);
+  net.init(3);
+  net.set_training(false);
+  yelan::test::Owned x(2, cfg.channels, cfg.height(), cfg.width(), 5);
+  net.forward(x.act);
+  REQUIRE(net.masks().c == cfg.n_masks);
+  REQUIRE(net.masks().h == cfg.height());
+  REQUIRE(net.masks().w == cfg.width());
+  REQUIRE(net.scores().size() == std::size_t(2 * cfg.n_masks));
+  for (float s : net.scores()) REQUIRE((s > 0.f && s < 1.f));
+  yelan::test::Owned wm(net.masks(), 6);
+  std::vector<float> ws(net.scores().size());
+  for (std::size_t i = 0; i < ws.size(); ++i) ws[i] = std::cos(1.3 * i);
+  layers::ParamList params;
+  net.params(params);
+  auto loss = [&] {
+    net.weights_changed();
+    net.forward(x.act);
+    double s = yelan::test::dot(wm.act, net.masks());
+    for (std::size_t i = 0; i < ws.size(); ++i) s += double(ws[i]) * net.scores()[i];
+    return s;
+  };
+  for (auto& p : params)
+    if (p.param->trainable) p.param->grad.zero();
+  loss();
+  net.backward(x.act, wm.act, ws.data());
+  int k = 0, checked = 0;
+  for (auto& p : params) {
+    if (!p.param->trainable || (k++ % 7 && p.key.rfind("fc.", 0) != 0 && p.key.rfind("score", 0) != 0)) continue;
+    INFO(p.key);
+    checked += yelan::test::check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
+                                 yelan::test::sample_all(p.param->numel(), p.param->numel() / 2 + 1), 1e-2, 1e-2,
+                                 p.key.c_str(), 0.0);
+  }
+  CHECK(checked >= 10);
 }
