@@ -32,18 +32,30 @@ def expected_shapes(cfg):
     return {g: {k: tuple(v.shape) for k, v in n.state_dict().items()} for g, n in nets.items()}
 
 
+LISTED_NAMES = 20
+LISTED_SHAPES = 10
+
+
 def describe_mismatch(where, expected, got):
-    """'' when the shapes of `got` equal `expected` exactly, else every difference."""
+    """'' when the shapes of `got` equal `expected` exactly, else the differences (the first
+    few of each kind: a file of another config differs in hundreds of tensors)."""
     missing = sorted(set(expected) - set(got))
     extra = sorted(set(got) - set(expected))
     wrong = sorted(k for k in set(expected) & set(got) if tuple(expected[k]) != tuple(got[k]))
+
+    def names(v):
+        more = f", ... ({len(v) - LISTED_NAMES} more)" if len(v) > LISTED_NAMES else ""
+        return ", ".join(v[:LISTED_NAMES]) + more
+
     lines = []
     if missing:
-        lines.append(f"{where}: {len(missing)} missing: " + ", ".join(missing))
+        lines.append(f"{where}: {len(missing)} missing: {names(missing)}")
     if extra:
-        lines.append(f"{where}: {len(extra)} unexpected: " + ", ".join(extra))
-    for k in wrong:
+        lines.append(f"{where}: {len(extra)} unexpected: {names(extra)}")
+    for k in wrong[:LISTED_SHAPES]:
         lines.append(f"{where}: {k}: shape {list(got[k])}, expected {list(expected[k])}")
+    if len(wrong) > LISTED_SHAPES:
+        lines.append(f"{where}: {len(wrong) - LISTED_SHAPES} more tensors with a wrong shape")
     return "\n".join(lines)
 
 

@@ -77,9 +77,21 @@ const std::vector<Command>& commands() {
        "       yelan model forward --weights W --input IN.h5 --output OUT.h5\n",
        nullptr, "layers and networks (issue 4)"},
       {"weights", "inspect, compare, verify and initialise HDF5 weights",
-       "usage: yelan weights inspect|diff|verify FILE\n"
-       "       yelan weights init --config NAME|FILE --seed N -o W.h5\n",
-       nullptr, "HDF5 weights (issue 4)"},
+       "usage: yelan weights inspect FILE [--json]\n"
+       "       yelan weights diff A B [--tol 0] [--all]\n"
+       "       yelan weights verify FILE --config NAME|FILE\n"
+       "       yelan weights init --config NAME|FILE --seed N -o W.h5   (not built yet)\n"
+       "\n"
+       "Our weights file: HDF5, root attributes format=\"yelan-weights\", version=1, config (JSON);\n"
+       "groups mask/ and pose/ with one float32 dataset per PyTorch state_dict key\n"
+       "(weights_tools/README.md; weights_tools/export_h5.py converts checkpoints).\n"
+       "inspect: format, version, config, tensors and parameters per group, every name and shape.\n"
+       "diff: max |a-b| of each tensor above --tol (--all: of every tensor), tensors only in A\n"
+       "or B, shape changes; exit 1 when anything differs beyond --tol.\n"
+       "verify: every tensor a config needs, with its shape, and nothing else (the config's\n"
+       "manifest: weights_tools/configs/NAME.manifest.json, or FILE.manifest.json beside a\n"
+       "config FILE). Bad or mismatched files exit 2, one line per problem.\n",
+       cmd_weights, "HDF5 weights (issue 4)"},
   };
   return table;
 }

@@ -21,4 +21,7 @@ int cmd_repr(const std::vector<std::string>& args, std::ostream& out, std::ostre
 // engine/cli/cmd_bench.cpp: benchmark suites (benchmarks/).
 int cmd_bench(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// engine/cli/cmd_weights.cpp: HDF5 weights files (weights_tools/).
+int cmd_weights(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace yelan::cli

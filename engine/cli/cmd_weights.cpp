@@ -1,0 +1,230 @@
+// `yelan weights inspect|diff|verify`: our HDF5 weights files (weights_tools/). Bad input
+// (a WeightsError) exits 2 with every problem on its own line; `diff` exits 1 when the
+// files differ beyond --tol, like diff(1).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <sstream>
+
+#include "engine/cli/args.h"
+#include "engine/cli/cli.h"
+#include "engine/cli/handlers.h"
+#include "weights_tools/json.h"
+#include "weights_tools/manifest.h"
+#include "weights_tools/weights_file.h"
+
+namespace yelan::cli {
+namespace {
+
+using weights::Shape;
+using weights::TensorInfo;
+using weights::WeightsReader;
+
+constexpr int kDiffer = 1;
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+struct GroupCounts {
+  std::size_t tensors = 0;
+  std::int64_t parameters = 0, values = 0;
+};
+
+GroupCounts counts(const std::vector<TensorInfo>& list) {
+  GroupCounts c;
+  for (const TensorInfo& t : list) {
+    ++c.tensors;
+    const std::int64_t n = weights::element_count(t.shape);
+    c.values += n;
+    if (weights::is_parameter(t.name)) c.parameters += n;
+  }
+  return c;
+}
+
+std::string json_shape(const Shape& s) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < s.size(); ++i) out.append(i ? "," : "").append(std::to_string(s[i]));
+  return out + "]";
+}
+
+int inspect(const Args& args, std::ostream& out) {
+  args.expect_positionals(1, 1);
+  WeightsReader r(args.positionals()[0]);
+  const std::string config = weights::Json::parse(r.config_json()).dump();
+  if (args.flag("--json")) {
+    out << "{\"file\":" << weights::json_quote(r.path()) << ",\"format\":" << weights::json_quote(weights::kFormat)
+        << ",\"version\":" << r.version() << ",\"config\":" << config << ",\"groups\":{";
+    bool first_group = true;
+    for (const std::string& g : weights::group_names()) {
+      const GroupCounts c = counts(r.tensors(g));
+      out << (first_group ? "" : ",") << weights::json_quote(g) << ":{\"tensors\":" << c.tensors
+          << ",\"parameters\":" << c.parameters << ",\"values\":" << c.values << ",\"shapes\":{";
+      first_group = false;
+      bool first = true;
+      for (const TensorInfo& t : r.tensors(g)) {
+        out << (first ? "" : ",") << weights::json_quote(t.name) << ":" << json_shape(t.shape);
+        first = false;
+      }
+      out << "}}";
+    }
+    out << "}}\n";
+    return kOk;
+  }
+  out << "file:    " << r.path() << "\n"
+      << "format:  " << weights::kFormat << ", version " << r.version() << "\n"
+      << "config:  " << config << "\n";
+  for (const std::string& g : weights::group_names()) {
+    const GroupCounts c = counts(r.tensors(g));
+    out << g << ":    " << c.tensors << " tensors, " << c.parameters << " parameters, " << c.values
+        << " values with BN buffers\n";
+  }
+  for (const std::string& g : weights::group_names())
+    for (const TensorInfo& t : r.tensors(g)) out << g << "/" << t.name << " " << weights::shape_text(t.shape) << "\n";
+  return kOk;
+}
+
+// Largest |a - b|; a NaN on one side only is an infinite difference, NaN on both none.
+double max_abs_diff(const std::vector<float>& a, const std::vector<float>& b) {
+  double worst = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const bool na = std::isnan(a[i]), nb = std::isnan(b[i]);
+    double d = 0;
+    if (na != nb) d = INFINITY;
+    else if (!na) d = std::fabs(static_cast<double>(a[i]) - static_cast<double>(b[i]));
+    worst = std::max(worst, d);
+  }
+  return worst;
+}
+
+double parse_tol(const Args& args) {
+  const std::string s = args.value_or("--tol", "0");
+  char* end = nullptr;
+  const double v = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || !(v >= 0) || !std::isfinite(v))
+    throw UsageError("--tol expects a finite number >= 0, got '" + s + "'");
+  return v;
+}
+
+int diff(const Args& args, std::ostream& out) {
+  args.expect_positionals(2, 2);
+  const double tol = parse_tol(args);
+  const bool all = args.flag("--all");
+  WeightsReader a(args.positionals()[0]), b(args.positionals()[1]);
+  std::size_t compared = 0, differing = 0, only_a = 0, only_b = 0, shapes = 0;
+  double worst = 0;
+  std::string worst_name;
+  for (const std::string& g : weights::group_names()) {
+    std::set<std::string> names;
+    for (const TensorInfo& t : a.tensors(g)) names.insert(t.name);
+    for (const TensorInfo& t : b.tensors(g)) names.insert(t.name);
+    for (const std::string& name : names) {
+      const TensorInfo* ta = a.find(g, name);
+      const TensorInfo* tb = b.find(g, name);
+      const std::string full = g + "/" + name;
+      if (!tb) {
+        out << "only in A: " << full << "\n";
+        ++only_a;
+        continue;
+      }
+      if (!ta) {
+        out << "only in B: " << full << "\n";
+        ++only_b;
+        continue;
+      }
+      if (ta->shape != tb->shape) {
+        out << "shape differs: " << full << " " << weights::shape_text(ta->shape) << " vs "
+            << weights::shape_text(tb->shape) << "\n";
+        ++shapes;
+        continue;
+      }
+      const double d = max_abs_diff(a.read(*ta), b.read(*tb));
+      ++compared;
+      if (worst_name.empty() || d > worst) {
+        worst = d;
+        worst_name = full;
+      }
+      if (d > tol) ++differing;
+      if (all || d > tol) out << full << " max |a-b| " << number(d) << "\n";
+    }
+  }
+  const bool same_config =
+      weights::Json::parse(a.config_json()).dump() == weights::Json::parse(b.config_json()).dump();
+  if (!same_config) out << "config differs\n";
+  out << "summary: " << compared << " tensors compared, " << differing << " differ by more than " << number(tol)
+      << ", max |a-b| " << number(worst) << (worst_name.empty() ? "" : " (" + worst_name + ")") << "; " << only_a
+      << " only in A, " << only_b << " only in B, " << shapes << " shapes differ\n";
+  return differing + only_a + only_b + shapes > 0 ? kDiffer : kOk;
+}
+
+// Dotted paths of the leaves where two JSON objects differ ("input.window").
+void json_differences(const weights::Json& a, const weights::Json& b, const std::string& at,
+                      std::vector<std::string>& out) {
+  if (a.is_object() && b.is_object()) {
+    std::set<std::string> keys;
+    for (const auto& [k, v] : a.members()) keys.insert(k);
+    for (const auto& [k, v] : b.members()) keys.insert(k);
+    for (const std::string& k : keys) {
+      const weights::Json *va = a.find(k), *vb = b.find(k);
+      const std::string path = at.empty() ? k : at + "." + k;
+      if (!va || !vb) out.push_back(path);
+      else json_differences(*va, *vb, path, out);
+    }
+  } else if (a.dump() != b.dump()) {
+    out.push_back(at);
+  }
+}
+
+int verify(const Args& args, std::ostream& out, std::ostream& err) {
+  args.expect_positionals(1, 1);
+  const auto config = args.value("--config");
+  if (!config) throw UsageError("weights verify needs --config NAME|FILE (see 'yelan weights --help')");
+  const weights::Manifest m = weights::find_manifest(*config);
+  WeightsReader r(args.positionals()[0]);
+  weights::verify(r, m);
+  std::vector<std::string> differ;
+  json_differences(weights::Json::parse(r.config_json()), weights::Json::parse(m.config_json), "", differ);
+  std::string fields;
+  for (const std::string& d : differ)
+    if (d != "description") fields.append(fields.empty() ? "" : ", ").append(d);
+  if (!fields.empty())
+    err << "yelan: warning: " << r.path() << ": its config differs from " << m.path << " in " << fields
+        << " (the tensors match)\n";
+  out << "ok: " << r.path() << " holds every tensor of config '" << m.config_name << "' with its shape";
+  for (const std::string& g : weights::group_names()) {
+    const GroupCounts c = counts(r.tensors(g));
+    out << "; " << g << " " << c.tensors << " tensors, " << c.parameters << " parameters";
+  }
+  out << "\n";
+  return kOk;
+}
+
+}  // namespace
+
+int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  if (argv.empty()) throw UsageError("weights needs a subcommand: inspect, diff or verify (see 'yelan weights --help')");
+  const std::string sub = argv[0];
+  const std::vector<std::string> rest(argv.begin() + 1, argv.end());
+  try {
+    if (sub == "inspect") return inspect(Args("weights inspect", rest, {}, {"--json"}), out);
+    if (sub == "diff") return diff(Args("weights diff", rest, {"--tol"}, {"--all"}), out);
+    if (sub == "verify") return verify(Args("weights verify", rest, {"--config"}, {}), out, err);
+    if (sub == "init") {
+      err << "yelan weights init: not built yet (needs the C++ networks: layers and networks, issue 4)\n";
+      return kRuntimeError;
+    }
+  } catch (const weights::WeightsError& e) {
+    std::istringstream lines(e.what());
+    for (std::string line; std::getline(lines, line);) err << "yelan: error: " << line << "\n";
+    return kUsageError;
+  } catch (const weights::JsonError& e) {
+    err << "yelan: error: config JSON: " << e.what() << "\n";
+    return kUsageError;
+  }
+  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init)");
+}
+
+}  // namespace yelan::cli
