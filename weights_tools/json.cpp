@@ -157,7 +157,12 @@ class JsonParser {
       return pos_ > s;
     };
     if (t_[pos_] == '-') ++pos_;
+    const std::size_t int_start = pos_;
     if (!digits()) fail("malformed number");
+    if (t_[int_start] == '0' && pos_ - int_start > 1) {
+      pos_ = int_start;
+      fail("leading zero in a number");
+    }
     if (pos_ < t_.size() && t_[pos_] == '.') {
       ++pos_;
       if (!digits()) fail("malformed number");

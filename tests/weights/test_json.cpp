@@ -37,6 +37,8 @@ TEST_CASE("json: malformed text names the byte offset and the problem", "[weight
            {"{1:2}", "offset 1: expected a string key"},
            {"1e999", "offset 0: number out of range"},
            {"-", "offset 1: malformed number"},
+           {"[-012]", "offset 2: leading zero in a number"},
+           {"1.", "offset 2: malformed number"},
            {R"("\q")", "offset 2: bad escape '\\q'"},
            {std::string(100, '['), "offset 65: nesting deeper than 64"},
        }) {
