@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <vector>
 
 #include "kernels/dispatch.h"
 
@@ -162,12 +163,13 @@ void bwd_weights_scalar(const ConvShape& s, const float* x, const float* dy, flo
   const Blocked b{s};
   std::memset(dw, 0, conv_weight_floats(s) * sizeof(float));
   if (dbias) std::memset(dbias, 0, std::size_t(s.ocb()) * kBlock * sizeof(float));
+  std::vector<double> bias_sum(s.oc, 0.0);
   for (int n = 0; n < s.n; ++n)
     for (int o = 0; o < s.oc; ++o)
       for (int oh = 0; oh < s.oh(); ++oh)
         for (int ow = 0; ow < s.ow(); ++ow) {
           const float g = dy[b.y(n, o, oh, ow)];
-          if (dbias) dbias[o] += g;
+          bias_sum[o] += g;
           for (int i = 0; i < s.ic; ++i)
             for (int kh = 0; kh < s.kh; ++kh) {
               const int ih = oh * s.stride - s.pad_h + kh;
@@ -179,6 +181,8 @@ void bwd_weights_scalar(const ConvShape& s, const float* x, const float* dy, flo
               }
             }
         }
+  if (dbias)
+    for (int o = 0; o < s.oc; ++o) dbias[o] = float(bias_sum[o]);
 }
 
 // Winograd by the textbook, one output channel and one tile at a time (the reference the
@@ -243,13 +247,15 @@ void add_channel_bias(int n, int cb, std::size_t pixels, const float* bias, floa
     }
 }
 void channel_sums(int n, int cb, std::size_t pixels, const float* x, float* sums) {
-  std::fill(sums, sums + std::size_t(cb) * kBlock, 0.f);
-  for (int i = 0; i < n; ++i)
-    for (int b = 0; b < cb; ++b) {
+  for (int b = 0; b < cb; ++b) {
+    double total[kBlock] = {};
+    for (int i = 0; i < n; ++i) {
       const float* p = x + (std::size_t(i) * cb + b) * pixels * kBlock;
       for (std::size_t px = 0; px < pixels; ++px)
-        for (int l = 0; l < kBlock; ++l) sums[b * kBlock + l] += p[px * kBlock + l];
+        for (int l = 0; l < kBlock; ++l) total[l] += p[px * kBlock + l];
     }
+    for (int l = 0; l < kBlock; ++l) sums[b * kBlock + l] = float(total[l]);
+  }
 }
 
 }  // namespace

@@ -292,13 +292,20 @@ void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float
     if (dbias) {
 #pragma omp for schedule(static)
       for (int ob = 0; ob < OCB; ++ob) {
-        vn acc[CONV_NV] = {};
+        // float sums over 256 pixels at a time, added up in double: a bias sees every
+        // pixel of the batch, far too many terms for one float accumulator
+        double total[kBlock] = {};
         for (int n = 0; n < s.n; ++n) {
           const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
-          for (std::ptrdiff_t p = 0; p < y_plane; p += kBlock)
-            for (int q = 0; q < CONV_NV; ++q) acc[q] += loadv(g + p + q * CONV_VL);
+          for (std::ptrdiff_t p0 = 0; p0 < y_plane; p0 += 256 * kBlock) {
+            vn acc[CONV_NV] = {};
+            for (std::ptrdiff_t p = p0; p < std::min(y_plane, p0 + 256 * kBlock); p += kBlock)
+              for (int q = 0; q < CONV_NV; ++q) acc[q] += loadv(g + p + q * CONV_VL);
+            for (int q = 0; q < CONV_NV; ++q)
+              for (int l = 0; l < CONV_VL; ++l) total[q * CONV_VL + l] += acc[q][l];
+          }
         }
-        for (int q = 0; q < CONV_NV; ++q) storev(dbias + ob * kBlock + q * CONV_VL, acc[q]);
+        for (int l = 0; l < kBlock; ++l) dbias[ob * kBlock + l] = float(total[l]);
       }
     }
   }

@@ -1,0 +1,152 @@
+#include "engine/losses.h"
+
+#include <cmath>
+#include <cstring>
+
+#include "kernels/heatmap.h"
+
+namespace yelan {
+
+using layers::Act;
+
+void target_gaussian(float mu_w, float mu_h, int h, int w, float sigma_px, float* out) {
+  // Normalised coordinates span 2 units over n pixels: sigma in them is 2 sigma_px / n.
+  const double sw = 2.0 * sigma_px / w, sh = 2.0 * sigma_px / h;
+  std::vector<double> gw(w), gh(h);
+  for (int c = 0; c < w; ++c) {
+    const double d = kernels::dsnt_coordinate(c, w) - mu_w;
+    gw[c] = std::exp(-0.5 * d * d / (sw * sw));
+  }
+  for (int r = 0; r < h; ++r) {
+    const double d = kernels::dsnt_coordinate(r, h) - mu_h;
+    gh[r] = std::exp(-0.5 * d * d / (sh * sh));
+  }
+  double sum = 0;
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) sum += gh[r] * gw[c];
+  sum += 1e-24;
+  for (int r = 0; r < h; ++r)
+    for (int c = 0; c < w; ++c) out[r * w + c] = float(gh[r] * gw[c] / sum);
+}
+
+namespace {
+
+constexpr double kEps = 1e-24;
+
+// JS(p, q) over one map (lane `lane` of image n of a blocked Act) and its gradient in p,
+// scaled by `scale`, added into dp.
+double js_map(const Act& p, int n, int lane, const float* q, double scale, const Act& dp) {
+  const std::size_t P = p.pixels();
+  const float* base = p.data + (std::size_t(n) * p.cb() + lane / 16) * P * 16 + lane % 16;
+  float* g = dp.data + (std::size_t(n) * dp.cb() + lane / 16) * P * 16 + lane % 16;
+  double js = 0;
+  for (std::size_t i = 0; i < P; ++i) {
+    const double a = base[i * 16], b = q[i], m = 0.5 * (a + b);
+    const double lm = std::log(m + kEps), la = std::log(a + kEps), lb = std::log(b + kEps);
+    js += 0.5 * a * (la - lm) + 0.5 * b * (lb - lm);
+    g[i * 16] += float(scale * 0.5 * (la - lm + a / (a + kEps) - m / (m + kEps)));
+  }
+  return js;
+}
+
+}  // namespace
+
+HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const float* valid,
+                 std::vector<std::array<Act, 3>>& dheat, std::vector<layers::Floats>& store) {
+  HpeLoss out;
+  const Act& ref = net.heatmap(0, 0);
+  const int n = ref.n, J = ref.c, h = ref.h, w = ref.w;
+  double count = 0;
+  for (int i = 0; i < n * J; ++i) count += valid[i];
+  const double denom = std::max(count, 1.0) * stages;  // masked mean, then the stage mean
+  dheat.assign(stages, {});
+  store.resize(std::size_t(stages) * 3);
+  std::vector<float> joints(std::size_t(n) * J * 3), dj(joints.size()), gauss(std::size_t(h) * w);
+  for (int t = 0; t < stages; ++t) {
+    for (int p = 0; p < 3; ++p) {
+      const Act& hm = net.heatmap(t, p);
+      layers::Floats& f = store[t * 3 + p];
+      if (f.size() != hm.floats()) f = layers::Floats(hm.floats());
+      f.zero();
+      dheat[t][p] = Act{f.data(), hm.n, hm.c, hm.h, hm.w};
+    }
+    layers::dsnt_joints_forward(net.heatmap(t, 0), net.heatmap(t, 1), net.heatmap(t, 2), joints.data());
+    double stage = 0, euclid = 0;
+    std::fill(dj.begin(), dj.end(), 0.f);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < J; ++j) {
+        const std::size_t k = std::size_t(i) * J + j;
+        if (valid[k] == 0.f) continue;
+        const float* tg = target + k * 3;
+        const float* pr = joints.data() + k * 3;
+        const double dx = pr[0] - tg[0], dy = pr[1] - tg[1], dz = pr[2] - tg[2];
+        const double d = std::sqrt(dx * dx + dy * dy + dz * dz);
+        euclid += d;
+        if (d > 0) {
+          dj[k * 3 + 0] = float(dx / d / denom);
+          dj[k * 3 + 1] = float(dy / d / denom);
+          dj[k * 3 + 2] = float(dz / d / denom);
+        }
+        // xy: (x, y); zy: width z, height y; xz: width x, height z
+        const float mu[3][2] = {{tg[0], tg[1]}, {tg[2], tg[1]}, {tg[0], tg[2]}};
+        for (int p = 0; p < 3; ++p) {
+          target_gaussian(mu[p][0], mu[p][1], h, w, 1.f, gauss.data());
+          stage += js_map(net.heatmap(t, p), i, j, gauss.data(), 1.0 / denom, dheat[t][p]);
+        }
+      }
+    // the distance's gradient reaches the maps through DSNT
+    std::vector<layers::Floats> tmp(3);
+    std::array<Act, 3> g;
+    for (int p = 0; p < 3; ++p) {
+      tmp[p] = layers::Floats(dheat[t][p].floats());
+      g[p] = Act{tmp[p].data(), dheat[t][p].n, dheat[t][p].c, dheat[t][p].h, dheat[t][p].w};
+    }
+    layers::dsnt_joints_backward(dj.data(), g[0], g[1], g[2]);
+    for (int p = 0; p < 3; ++p) layers::accumulate(g[p], dheat[t][p]);
+    stage += euclid;
+    out.per_stage.push_back(stage / std::max(count, 1.0));
+    out.euclid.push_back(euclid / std::max(count, 1.0));
+    out.total += stage / denom;
+  }
+  return out;
+}
+
+MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std::vector<float>& dscores) {
+  const Act& m = net.masks();
+  const int n = m.n, N = m.c;
+  const std::size_t P = m.pixels();
+  MaskLoss out;
+  std::memset(dmasks.data, 0, dmasks.floats() * sizeof(float));
+  const double n_first = double(n) * P, n_all = double(n) * N * P;
+  std::vector<double> score_gt(std::size_t(n) * N, 0.0);
+  for (int i = 0; i < n; ++i)
+    for (int c = 0; c < N; ++c) {
+      const std::size_t off = (std::size_t(i) * m.cb() + c / 16) * P * 16 + c % 16;
+      double abs_sum = 0;
+      for (std::size_t p = 0; p < P; ++p) {
+        const double x = m.data[off + p * 16], y = labels.data[off + p * 16];
+        const double l = std::max(x, 0.0) - x * y + std::log1p(std::exp(-std::abs(x)));
+        const double s = 1.0 / (1.0 + std::exp(-x));
+        out.bce_all += l / n_all;
+        double g = (s - y) / n_all;
+        if (c == 0) {
+          out.bce_first += l / n_first;
+          g += (s - y) / n_first;
+        }
+        dmasks.data[off + p * 16] = float(g);
+        abs_sum += std::abs(s - y);
+      }
+      score_gt[std::size_t(i) * N + c] = 1.0 - abs_sum / double(P);
+    }
+  dscores.assign(std::size_t(n) * N, 0.f);
+  const auto& s = net.scores();
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const double d = s[k] - score_gt[k];
+    out.score_mse += d * d / double(s.size());
+    dscores[k] = float(2.0 * d / double(s.size()));
+  }
+  out.total = out.bce_first + out.bce_all + out.score_mse;
+  return out;
+}
+
+}  // namespace yelan

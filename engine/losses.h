@@ -1,0 +1,45 @@
+// The training losses of SPEC section 6, as the reference code computes them
+// (scripts/model/losses.py, unet_interface.py of miracleyoo/yelan-dynamic-dvs-hpe):
+//
+// HPE, per stage t: over joints j of frames n with valid[n][j],
+//   e = |joints_t - target| (3D, normalised units) + JS(xy_t, G(x, y)) + JS(zy_t, G(z, y))
+//       + JS(xz_t, G(x, z)),  joints_t = DSNT of stage t's maps,
+//   G(u, v) a Gaussian of sigma 1 heatmap pixel at (u, v) on the pixel-centre grid,
+//   normalised to sum 1; KL(p, q) = sum p (log(p + 1e-24) - log(q + 1e-24));
+//   L_t = sum valid e / max(sum valid, 1);   L = mean over stages.
+// Mask: BCE(logits[:, 0], labels[:, 0]) + BCE(logits, labels) + MSE(scores, s*), both BCE
+//   means over their elements, s* = 1 - mean over pixels |sigmoid(logits) - labels| (no
+//   gradient through s*).
+#pragma once
+#include <array>
+#include <vector>
+
+#include "engine/mask_net.h"
+#include "engine/pose_net.h"
+
+namespace yelan {
+
+struct HpeLoss {
+  double total = 0;
+  std::vector<double> per_stage;  // L_t
+  std::vector<double> euclid;     // the distance part of each stage
+};
+
+// Computes the loss of the net's last forward and fills dheat (one entry per stage:
+// xy, zy, xz gradient maps, storage in `store`). target: n x J x 3, valid: n x J (0/1).
+HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const float* valid,
+                 std::vector<std::array<layers::Act, 3>>& dheat, std::vector<layers::Floats>& store);
+
+struct MaskLoss {
+  double total = 0, bce_first = 0, bce_all = 0, score_mse = 0;
+};
+
+// labels: the same blocked layout and shape as net.masks(). dmasks gets dL/dlogits;
+// dscores (n x N) dL/dscores.
+MaskLoss mask_loss(const MaskNet& net, const layers::Act& labels, const layers::Act& dmasks,
+                   std::vector<float>& dscores);
+
+// The normalised target Gaussian of one joint on an h x w map (sum 1), as a plain array.
+void target_gaussian(float mu_w, float mu_h, int h, int w, float sigma_px, float* out);
+
+}  // namespace yelan
