@@ -4,12 +4,15 @@
 void simd_lstm_fwd(const LstmShape& s, const float* gates, const float* c_prev, float* act, float* c, float* h,
                    float* tanh_c) {
   const std::size_t E = std::size_t(s.hb) * s.pixels * 16;
-#pragma omp parallel for schedule(static)
-  for (int n = 0; n < s.n; ++n) {
+  // Parallel over images and over 1024-float chunks of each: a live window is one image.
+  const std::ptrdiff_t chunks = std::ptrdiff_t((E + 1023) / 1024);
+#pragma omp parallel for collapse(2) schedule(static)
+  for (int n = 0; n < s.n; ++n)
+  for (std::ptrdiff_t ch = 0; ch < chunks; ++ch) {
     const float* gi = gates + std::size_t(n) * 4 * E;
     float* ai = act + std::size_t(n) * 4 * E;
     const std::size_t so = std::size_t(n) * E;
-    for (std::size_t e = 0; e < E; e += VL) {
+    for (std::size_t e = std::size_t(ch) * 1024; e < std::min(E, std::size_t(ch + 1) * 1024); e += VL) {
       const vf i = vsigmoid(loadf(gi + e)), f = vsigmoid(loadf(gi + E + e));
       const vf o = vsigmoid(loadf(gi + 2 * E + e)), g = vtanh(loadf(gi + 3 * E + e));
       const vf cp = c_prev ? loadf(c_prev + so + e) : vf{};
@@ -29,12 +32,14 @@ void simd_lstm_bwd(const LstmShape& s, const float* act, const float* c_prev, co
                    const float* dc, float* dgates, float* dc_prev) {
   const std::size_t E = std::size_t(s.hb) * s.pixels * 16;
   const vf one = splat(1.f);
-#pragma omp parallel for schedule(static)
-  for (int n = 0; n < s.n; ++n) {
+  const std::ptrdiff_t chunks = std::ptrdiff_t((E + 1023) / 1024);
+#pragma omp parallel for collapse(2) schedule(static)
+  for (int n = 0; n < s.n; ++n)
+  for (std::ptrdiff_t ch = 0; ch < chunks; ++ch) {
     const float* a = act + std::size_t(n) * 4 * E;
     float* d = dgates + std::size_t(n) * 4 * E;
     const std::size_t so = std::size_t(n) * E;
-    for (std::size_t e = 0; e < E; e += VL) {
+    for (std::size_t e = std::size_t(ch) * 1024; e < std::min(E, std::size_t(ch + 1) * 1024); e += VL) {
       const vf i = loadf(a + e), f = loadf(a + E + e), o = loadf(a + 2 * E + e), g = loadf(a + 3 * E + e);
       const vf t = loadf(tanh_c + so + e), cp = c_prev ? loadf(c_prev + so + e) : vf{};
       const vf gh = loadf(dh + so + e);

@@ -1,6 +1,10 @@
 #include "benchmarks/events/bench_events.h"
 
 #include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <unistd.h>
 #include <chrono>
 #include <cstring>
 #include <iomanip>
@@ -9,6 +13,7 @@
 
 #include "camera/event.h"
 #include "camera/io/event_reader.h"
+#include "camera/io/event_writer.h"
 #include "camera/repr/filters.h"
 #include "camera/repr/tore.h"
 #include "engine/cli/args.h"
@@ -67,12 +72,17 @@ std::vector<Event> edge_stream(std::size_t n, int width, int height, unsigned se
 }
 
 void print_text(const std::vector<Record>& recs, std::ostream& out) {
-  for (const Record& r : recs)
-    out << std::left << std::setw(26) << r.name << std::right << std::fixed << std::setprecision(3)
+  for (const Record& r : recs) {
+    out << std::left << std::setw(34) << r.name << std::right << std::fixed << std::setprecision(3)
         << std::setw(12) << r.value << " " << std::setw(10) << std::left << r.unit << std::right
         << "  time " << std::setprecision(4) << r.seconds * 1e3 << " ms, " << r.baseline << " of "
         << r.bytes << " B " << r.baseline_s * 1e3 << " ms, ratio " << std::setprecision(2)
-        << r.seconds / r.baseline_s << "\n";
+        << r.seconds / r.baseline_s;
+    if (r.baseline == "cat")
+      out << " (" << std::setprecision(1) << r.bytes / r.seconds / 1e6 << " MB/s vs cat " << r.bytes / r.baseline_s / 1e6
+          << " MB/s)";
+    out << "\n";
+  }
 }
 
 void print_json(const std::vector<Record>& recs, std::ostream& out) {
@@ -83,10 +93,59 @@ void print_json(const std::vector<Record>& recs, std::ostream& out) {
         << "\", \"value\": " << r.value << ", \"seconds\": " << r.seconds
         << ", \"baseline\": \"" << r.baseline << "\", \"baseline_bytes\": " << r.bytes
         << ", \"baseline_seconds\": " << r.baseline_s
-        << ", \"ratio_to_baseline\": " << r.seconds / r.baseline_s << "}"
+        << ", \"ratio_to_baseline\": " << r.seconds / r.baseline_s;
+    if (r.baseline == "cat") out << ", \"mb_per_s\": " << r.bytes / r.seconds / 1e6 << ", \"cat_mb_per_s\": " << r.bytes / r.baseline_s / 1e6;
+    out << "}"
         << (i + 1 < recs.size() ? "," : "") << "\n";
   }
   out << "]\n";
+}
+
+// Reading whole files through open_event_file, against a plain read of the same bytes
+// ("cat": fread into a 1 MiB buffer) measured right before it: the formats' decoding cost.
+void bench_reading(int reps, std::size_t n, std::vector<Record>& recs) {
+  namespace fs = std::filesystem;
+  std::vector<std::pair<std::string, std::string>> files;  // name, path
+  const char* env = std::getenv("YELAN_SHARED_DATA");
+  const fs::path shared = fs::path(env ? env : YELAN_SOURCE_DIR "/../shared/data") / "events";
+  for (const char* f : {"aestream_davis.aedat4", "evt2_sample.raw", "evt3_sample.raw"})
+    if (fs::exists(shared / f)) files.emplace_back(std::string("real:") + f, (shared / f).string());
+  // Our writable formats, from one synthetic moving-edge stream.
+  const fs::path dir = fs::temp_directory_path() / ("yelan-bench-read-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const auto stream = edge_stream(n, 346, 260, 3);
+  camera::StreamInfo info;
+  info.width = 346;
+  info.height = 260;
+  for (const char* ext : {"yelan.h5", "aedat4", "txt"}) {
+    const std::string path = (dir / (std::string("edge.") + ext)).string();
+    auto w = camera::open_event_writer(path, info);
+    w->write(stream);
+    w->close();
+    files.emplace_back(std::string("synthetic:edge.") + ext, path);
+  }
+  std::vector<char> buf(1 << 20);
+  for (const auto& [name, path] : files) {
+    const std::size_t bytes = fs::file_size(path);
+    const double cat = median_seconds(reps, [&] {
+      FILE* f = std::fopen(path.c_str(), "rb");
+      if (!f) return;
+      while (std::fread(buf.data(), 1, buf.size(), f) == buf.size()) {}
+      std::fclose(f);
+    });
+    std::size_t events = 0;
+    const double s = median_seconds(reps, [&] {
+      auto reader = camera::open_event_file(path);
+      std::vector<Event> ev;
+      events = 0;
+      while (reader->read(ev, 1 << 16) > 0) {
+        events += ev.size();
+        ev.clear();
+      }
+    });
+    recs.push_back({"read " + name, "Mev/s", events / s / 1e6, s, cat, "cat", bytes});
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace
@@ -94,7 +153,7 @@ void print_json(const std::vector<Record>& recs, std::ostream& out) {
 // Usage errors are thrown (cli::UsageError), so nothing is written to the error stream.
 int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& /*err*/) {
   cli::Args args("bench events", argv, {"--events", "--reps", "--k", "--width", "--height", "--file", "--threads"},
-                 {"--quick", "--json"});
+                 {"--quick", "--json", "--no-read"});
   args.expect_positionals(0, 0);
   const bool quick = args.flag("--quick");
   const int n = args.int_value_or("--events", quick ? 1'000'000 : 8'000'000, 1000, 200'000'000);
@@ -179,6 +238,8 @@ int run_events_bench(const std::vector<std::string>& argv, std::ostream& out, st
     recs.push_back({"tore_readout_" + std::to_string(threads) + "threads", "ms/volume", s * 1e3, s, base,
                     "memset", bytes});
   }
+
+  if (!args.flag("--no-read")) bench_reading(quick ? 3 : 5, quick ? 500'000 : 2'000'000, recs);
 
   if (args.flag("--json")) {
     print_json(recs, out);
