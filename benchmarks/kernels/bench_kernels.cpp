@@ -2,7 +2,11 @@
 
 #include <omp.h>
 
+#include <fstream>
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <iomanip>
@@ -100,7 +104,7 @@ void print_json(std::ostream& out, const std::vector<Record>& recs) {
 }  // namespace
 
 int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench kernels", argv, {"--isa-list", "--threads-list", "--reps", "--chart", "--only"},
+  cli::Args args("bench kernels", argv, {"--isa-list", "--threads-list", "--reps", "--chart", "--only", "--from"},
                  {"--quick", "--json", "--no-torch", "--no-onednn"});
   args.expect_positionals(0, 0);
   const bool quick = args.flag("--quick");
@@ -118,10 +122,34 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
 
   std::vector<Record> recs;
   std::vector<ConvCase> used;
+  if (auto from = args.value("--from")) {  // re-render saved results: no measuring
+    std::ifstream f(*from);
+    if (!f) throw cli::UsageError("--from: cannot read " + *from);
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(f);
+    } catch (const nlohmann::json::exception& e) {
+      throw cli::UsageError("--from " + *from + ": not a results file (" + e.what() + ")");
+    }
+    for (const auto& o : j) {
+      Record r{o.value("where", ""), o.value("op", ""), o.value("algo", "direct"), o.value("kh", 0), o.value("kw", 0),
+               o.value("stride", 0), o.value("cin", 0), o.value("cout", 0), o.value("h", 0), o.value("w", 0),
+               o.value("isa", ""), o.value("threads", 0), o.value("ms", 0.0), o.value("gflops", 0.0),
+               o.value("peak_gflops", 0.0), o.value("pct_peak", 0.0)};
+      r.torch_gflops = o.value("torch_gflops", 0.0);
+      r.onednn_gflops = o.value("onednn_gflops", 0.0);
+      r.bytes = o.value("bytes", 0.0);
+      r.memcpy_ms = o.value("memcpy_ms", 0.0);
+      recs.push_back(r);
+    }
+    if (!args.value("--isa-list")) isas = {kernels::parse_isa(recs.empty() ? "scalar" : recs.back().isa).value_or(kernels::Isa::scalar)};
+    if (!args.value("--threads-list")) thread_counts = {1};
+  }
   const int saved_threads = threads();
   const Isa saved_isa = kernels::active_isa();
   for (Isa isa : isas) {
     for (int t : thread_counts) {
+      if (args.value("--from")) break;
       set_threads(t);
       const double peak_before = measure_peak_gflops(isa, t, reps);
       const std::size_t first = recs.size();
@@ -189,7 +217,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
   }
   set_threads(saved_threads);
   kernels::set_isa(saved_isa);
-  if (!args.flag("--no-torch")) {
+  if (!args.flag("--no-torch") && !args.value("--from")) {
     std::string why;
     const TorchTimes torch = torch_conv_times(used, thread_counts, reps, &why);
     if (!why.empty()) err << "no PyTorch comparison: " << why << "\n";
@@ -223,11 +251,15 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
   if (args.flag("--json")) print_json(out, recs);
   if (auto chart = args.value("--chart")) {
     std::vector<Bar> bars;
+    double top = 100;
     for (const Record& r : recs)
-      if (r.threads == thread_counts.front() && r.isa == kernels::isa_name(isas.back()))
-        bars.push_back({r.where + " " + r.op, r.pct_peak});
-    write_bar_chart_svg(*chart, "% of measured FMA peak, " + std::string(kernels::isa_name(isas.back())) + ", " +
-                                    std::to_string(thread_counts.front()) + " thread(s)", bars, 100.0);
+      if (r.threads == thread_counts.front() && r.isa == kernels::isa_name(isas.back()) && r.bytes == 0) {
+        bars.push_back({r.where + " " + r.op + (r.algo == "direct" ? "" : " (" + r.algo + ")"), r.pct_peak});
+        top = std::max(top, std::ceil(r.pct_peak / 50) * 50);
+      }
+    write_bar_chart_svg(*chart, "% of measured FMA peak (Winograd: direct-equivalent), " +
+                                    std::string(kernels::isa_name(isas.back())) + ", " +
+                                    std::to_string(thread_counts.front()) + " thread(s)", bars, top);
     err << "chart written to " << *chart << "\n";
   }
   return 0;

@@ -38,6 +38,11 @@ void write_bar_chart_svg(const std::string& path, const std::string& title, cons
         << "\" stroke=\"#ccc\"/><text x=\"" << x - 8 << "\" y=\"" << height - 10 << "\">"
         << g * max_value / 100 << "</text>\n";
     }
+    if (max_value > 100) {  // mark 100 when the scale goes beyond it
+      const double x100 = label_w + plot_w * 100.0 / max_value;
+      f << "<line x1=\"" << x100 << "\" y1=\"" << top - 5 << "\" x2=\"" << x100 << "\" y2=\"" << height - 25
+        << "\" stroke=\"#c33\" stroke-dasharray=\"4 3\"/>\n";
+    }
     for (std::size_t i = 0; i < bars.size(); ++i) {
       const double y = top + double(i) * row_h;
       const double w = plot_w * std::clamp(bars[i].value / max_value, 0.0, 1.0);

@@ -61,7 +61,7 @@ const std::vector<Command>& commands() {
        cmd_devices, "the libusb driver (issue 5)"},
       {"bench", "benchmarks: kernels, events, run, early-exit",
        "usage: yelan bench kernels [--quick] [--json] [--isa-list avx2,avx512] [--threads-list 1,2]\n"
-       "                          [--reps N] [--only NAME] [--chart FILE.svg]\n"
+       "                          [--reps N] [--only NAME] [--chart FILE.svg] [--from RESULTS.json]\n"
        "       yelan bench events [--json]\n"
        "\n"
        "kernels: every convolution shape of the networks (forward, backward-data,\n"
@@ -70,7 +70,8 @@ const std::vector<Command>& commands() {
        "softmax) against a memcpy of the same bytes; oneDNN and PyTorch 1.13 on the same\n"
        "shapes when installed (scripts/setup-debian --reference).\n"
        "--quick: the 3x3/1 shapes, best ISA, 1 thread. --only NAME: shapes whose name\n"
-       "contains NAME ('memory', 'convlstm.step' for those groups).\n",
+       "contains NAME ('memory', 'convlstm.step' for those groups). --from: re-print the\n"
+       "table (and --chart) of a saved --json run without measuring.\n",
        cmd_bench, ""},
       {"model", "network summaries and forward passes",
        "usage: yelan model summary --config X [--json]\n"
