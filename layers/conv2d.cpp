@@ -11,6 +11,11 @@ std::vector<std::int64_t> weight_shape(const ConvSpec& s) {
 }
 }  // namespace
 
+std::uint64_t& conv_flops() {
+  static std::uint64_t count = 0;
+  return count;
+}
+
 Conv2d::Conv2d(const ConvSpec& spec) : weight("weight", weight_shape(spec)), spec_(spec) {
   if (spec.bias) bias = std::make_unique<Param>("bias", std::vector<std::int64_t>{spec.out});
 }
@@ -88,6 +93,7 @@ void Conv2d::forward(const Act& x, const Act& y, bool winograd) {
   check(y, o.c, o.h, o.w, "output");
   if (!s.valid()) throw std::invalid_argument("conv: input " + std::to_string(x.h) + "x" + std::to_string(x.w) + " too small");
   pack(s);
+  conv_flops() += std::uint64_t(s.flops());
   const kernels::ConvKernels& k = kernels::conv_kernels();
   const float* b = bias ? bias16_.data() : nullptr;
   if (spec_.transposed)

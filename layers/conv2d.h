@@ -17,6 +17,10 @@ struct ConvSpec {
   int out_pad_h = 0, out_pad_w = 0;
 };
 
+// Multiply-add FLOPs of every Conv2d forward since the last reset (`conv_flops() = 0`):
+// what `yelan model summary` reports. Not thread-safe; a diagnostic.
+std::uint64_t& conv_flops();
+
 class Conv2d {
  public:
   explicit Conv2d(const ConvSpec& spec);

@@ -14,6 +14,7 @@
 #include "engine/model_config.h"
 #include "engine/pose_net.h"
 #include "layer_fd.h"
+#include "weights_tools/network_io.h"
 #include "weights_tools/weights_file.h"
 
 using namespace yelan;
@@ -56,19 +57,7 @@ Array read_dataset(const std::string& file, const std::string& name) {
   return a;
 }
 
-// Copies a weights file's group into the network's parameters, insisting on the same
-// names and shapes both ways.
-void load_group(const weights::Weights& w, const std::string& group, layers::ParamList& params) {
-  const auto& g = w.groups.at(group);
-  REQUIRE(g.size() == params.size());
-  for (auto& p : params) {
-    INFO(group << "/" << p.key);
-    auto it = g.find(p.key);
-    REQUIRE(it != g.end());
-    REQUIRE(it->second.shape == p.param->shape);
-    std::copy(it->second.data.begin(), it->second.data.end(), p.param->value.data());
-  }
-}
+using weights::load_group;  // every name and shape checked both ways
 
 // NCHW (n, c, h, w) array -> blocked activation.
 yelan::test::Owned to_act(const Array& a) {
@@ -177,16 +166,6 @@ double attr(const std::string& file, const std::string& name) {
   H5Aclose(a);
   H5Fclose(f);
   return v;
-}
-
-// ||ours - ref|| / ||ref|| (L2) for one parameter's gradient.
-double rel_l2(const float* ours, const Array& ref) {
-  double d = 0, r = 0;
-  for (std::size_t i = 0; i < ref.data.size(); ++i) {
-    d += (double(ours[i]) - ref.data[i]) * (double(ours[i]) - ref.data[i]);
-    r += double(ref.data[i]) * ref.data[i];
-  }
-  return r > 0 ? std::sqrt(d / r) : std::sqrt(d);
 }
 
 // max |ours - ref| / max |ref| for one parameter's gradient (or buffer).

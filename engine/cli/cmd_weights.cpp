@@ -212,10 +212,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "inspect") return inspect(Args("weights inspect", rest, {}, {"--json"}), out);
     if (sub == "diff") return diff(Args("weights diff", rest, {"--tol"}, {"--all"}), out);
     if (sub == "verify") return verify(Args("weights verify", rest, {"--config"}, {}), out, err);
-    if (sub == "init") {
-      err << "yelan weights init: not built yet (needs the C++ networks: layers and networks, issue 4)\n";
-      return kRuntimeError;
-    }
+    if (sub == "init") return weights_init(rest, out);
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
     for (std::string line; std::getline(lines, line);) err << "yelan: error: " << line << "\n";

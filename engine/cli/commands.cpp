@@ -74,14 +74,20 @@ const std::vector<Command>& commands() {
        "table (and --chart) of a saved --json run without measuring.\n",
        cmd_bench, ""},
       {"model", "network summaries and forward passes",
-       "usage: yelan model summary --config X [--json]\n"
-       "       yelan model forward --weights W --input IN.h5 --output OUT.h5\n",
-       nullptr, "layers and networks (issue 4)"},
+       "usage: yelan model summary --config NAME|FILE [--json]\n"
+       "       yelan model forward --weights W --input IN.h5 --output OUT.h5\n"
+       "\n"
+       "summary: parameters of both networks per top-level module, convolution FLOPs per\n"
+       "frame (--json: params_mask, params_pose, flops_per_pose, flops_per_mask, layers).\n"
+       "forward: both networks in inference mode on dataset `input` (S x C x H x W, S a\n"
+       "multiple of the window); writes masks, scores, heatmaps/stage<i>/{xy,zy,xz} and\n"
+       "joints_norm, as weights_tools/make_parity_case.py does for PyTorch.\n",
+       cmd_model, ""},
       {"weights", "inspect, compare, verify and initialise HDF5 weights",
        "usage: yelan weights inspect FILE [--json]\n"
        "       yelan weights diff A B [--tol 0] [--all]\n"
        "       yelan weights verify FILE --config NAME|FILE\n"
-       "       yelan weights init --config NAME|FILE --seed N -o W.h5   (not built yet)\n"
+       "       yelan weights init --config NAME|FILE --seed N -o W.h5\n"
        "\n"
        "Our weights file: HDF5, root attributes format=\"yelan-weights\", version=1, config (JSON);\n"
        "groups mask/ and pose/ with one float32 dataset per PyTorch state_dict key\n"

@@ -24,4 +24,8 @@ int cmd_bench(const std::vector<std::string>& args, std::ostream& out, std::ostr
 // engine/cli/cmd_weights.cpp: HDF5 weights files (weights_tools/).
 int cmd_weights(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// engine/cli/cmd_model.cpp: the C++ networks (`yelan model`, `yelan weights init`).
+int cmd_model(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+int weights_init(const std::vector<std::string>& args, std::ostream& out);
+
 }  // namespace yelan::cli

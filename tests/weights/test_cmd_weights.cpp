@@ -124,7 +124,7 @@ TEST_CASE("yelan weights verify: ok, mismatches exit 2 one line each, config dri
                        "yelan: error: " + (dir / "bad.h5") + " (pose): 1 missing: cl.fuse_list.0.weight\n");
 }
 
-TEST_CASE("yelan weights: usage errors exit 2, missing files exit 2, init is not built yet", "[weights][cli]") {
+TEST_CASE("yelan weights: usage errors exit 2, missing files exit 2", "[weights][cli]") {
   struct Case { std::vector<std::string> argv; int code; std::string says; };
   for (const Case& c : std::vector<Case>{
            {{"weights"}, 2, "weights needs a subcommand: inspect, diff or verify"},
@@ -137,7 +137,7 @@ TEST_CASE("yelan weights: usage errors exit 2, missing files exit 2, init is not
            {{"weights", "verify", "a.h5"}, 2, "weights verify needs --config NAME|FILE"},
            {{"weights", "verify", "a.h5", "--config", "no-such-config"}, 2, "no config named 'no-such-config'"},
            {{"weights", "inspect", "/nonexistent/w.h5"}, 2, "yelan: error: /nonexistent/w.h5: no such file\n"},
-           {{"weights", "init", "--config", "tiny"}, 1, "not built yet"},
+           {{"weights", "init", "--config", "tiny"}, 2, "weights init needs --config NAME|FILE --seed N -o W.h5"},
        }) {
     INFO(c.says);
     const auto r = yelan_cli(c.argv);

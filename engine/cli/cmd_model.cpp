@@ -1,0 +1,236 @@
+// `yelan model summary|forward` and `yelan weights init`: the C++ networks from a config
+// or a weights file.
+#include <hdf5.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iomanip>
+#include <sstream>
+
+#include "camera/io/h5.h"
+#include "engine/cli/args.h"
+#include "engine/cli/cli.h"
+#include "engine/cli/handlers.h"
+#include "engine/mask_net.h"
+#include "engine/pose_net.h"
+#include "layers/conv2d.h"
+#include "weights_tools/network_io.h"
+
+namespace yelan::cli {
+namespace {
+
+namespace h5 = camera::h5;
+
+std::int64_t count(const layers::ParamList& params, bool trainable_only) {
+  std::int64_t n = 0;
+  for (const auto& p : params)
+    if (!trainable_only || p.param->trainable) n += std::int64_t(p.param->numel());
+  return n;
+}
+
+// Parameters per top-level module (the key's first component), in first-seen order.
+std::vector<std::pair<std::string, std::int64_t>> by_module(const layers::ParamList& params) {
+  std::vector<std::pair<std::string, std::int64_t>> out;
+  for (const auto& p : params) {
+    if (!p.param->trainable) continue;
+    const std::string top = p.key.substr(0, p.key.find('.'));
+    if (out.empty() || out.back().first != top) out.push_back({top, 0});
+    out.back().second += std::int64_t(p.param->numel());
+  }
+  return out;
+}
+
+// Blocked activation <-> NCHW float array.
+void to_blocked(const std::vector<float>& a, const layers::Act& o) {
+  for (int n = 0; n < o.n; ++n)
+    for (int c = 0; c < o.c; ++c)
+      for (std::size_t p = 0; p < o.pixels(); ++p)
+        o.data[((std::size_t(n) * o.cb() + c / 16) * o.pixels() + p) * 16 + c % 16] = a[(std::size_t(n) * o.c + c) * o.pixels() + p];
+}
+std::vector<float> from_blocked(const layers::Act& o) {
+  std::vector<float> a(std::size_t(o.n) * o.c * o.pixels());
+  for (int n = 0; n < o.n; ++n)
+    for (int c = 0; c < o.c; ++c)
+      for (std::size_t p = 0; p < o.pixels(); ++p)
+        a[(std::size_t(n) * o.c + c) * o.pixels() + p] = o.data[((std::size_t(n) * o.cb() + c / 16) * o.pixels() + p) * 16 + c % 16];
+  return a;
+}
+
+void write_dataset(hid_t file, const std::string& name, const std::vector<hsize_t>& dims, const float* data) {
+  // intermediate groups ("heatmaps/stage0/xy")
+  for (std::size_t at = name.find('/'); at != std::string::npos; at = name.find('/', at + 1))
+    if (!h5::exists(file, name.substr(0, at))) h5::create_group(file, name.substr(0, at));
+  h5::H5Id space = h5::check(H5Screate_simple(int(dims.size()), dims.data(), nullptr), "dataspace for " + name);
+  h5::H5Id props = h5::untimed_dataset_props();
+  h5::H5Id ds = h5::check(H5Dcreate2(file, name.c_str(), H5T_NATIVE_FLOAT, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT),
+                          "create " + name);
+  h5::check(H5Dwrite(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
+}
+
+int summary(const Args& a, std::ostream& out) {
+  a.expect_positionals(0, 0);
+  const auto name = a.value("--config");
+  if (!name) throw UsageError("model summary needs --config NAME|FILE");
+  const ModelConfig cfg = load_model_config(*name);
+  MaskNet mask(cfg);
+  PoseNet pose(cfg);
+  layers::ParamList mp, pp;
+  mask.params(mp);
+  pose.params(pp);
+  // FLOPs: a forward of one zero frame (a window of 1) through both networks, counting
+  // every convolution; per-frame work does not depend on the window length.
+  layers::Floats input(std::size_t((cfg.channels + 15) / 16) * cfg.height() * cfg.width() * 16);
+  const layers::Act x{input.data(), 1, cfg.channels, cfg.height(), cfg.width()};
+  mask.set_training(false);
+  pose.set_training(false);
+  layers::conv_flops() = 0;
+  mask.forward(x);
+  const double mask_flops = double(layers::conv_flops());
+  layers::conv_flops() = 0;
+  pose.forward(x, 1);
+  const double pose_flops = double(layers::conv_flops());
+  if (a.flag("--json")) {
+    out << "{\"config\": \"" << cfg.name << "\", \"params_mask\": " << count(mp, true) << ", \"params_pose\": "
+        << count(pp, true) << ", \"flops_per_pose\": " << std::llround(pose_flops)
+        << ", \"flops_per_mask\": " << std::llround(mask_flops) << ", \"input\": [" << cfg.window << ", " << cfg.channels
+        << ", " << cfg.height() << ", " << cfg.width() << "], \"layers\": [";
+    bool first = true;
+    for (auto [net, params] : {std::pair{"mask", &mp}, std::pair{"pose", &pp}})
+      for (auto& [m, n] : by_module(*params)) {
+        out << (first ? "" : ", ") << "{\"net\": \"" << net << "\", \"module\": \"" << m << "\", \"params\": " << n << "}";
+        first = false;
+      }
+    out << "]}\n";
+    return kOk;
+  }
+  out << "config " << cfg.name << ": input " << cfg.window << " x " << cfg.channels << " x " << cfg.height() << " x "
+      << cfg.width() << ", ConvLSTM " << (cfg.bidirectional ? "bidirectional" : "causal") << "\n";
+  for (auto [net, params] : {std::pair{"mask", &mp}, std::pair{"pose", &pp}}) {
+    out << net << " net: " << count(*params, true) << " parameters (+" << count(*params, false) - count(*params, true)
+        << " BN buffers)\n";
+    for (auto& [m, n] : by_module(*params)) out << "  " << std::left << std::setw(20) << m << std::right << n << "\n";
+  }
+  out << std::fixed << std::setprecision(2) << "convolution GFLOPs per frame: mask " << mask_flops / 1e9 << ", pose "
+      << pose_flops / 1e9 << "\n";
+  return kOk;
+}
+
+int forward(const Args& a, std::ostream& out) {
+  a.expect_positionals(0, 0);
+  const auto wpath = a.value("--weights"), in = a.value("--input"), outp = a.value("--output");
+  if (!wpath || !in || !outp) throw UsageError("model forward needs --weights W --input IN.h5 --output OUT.h5");
+  const weights::Weights w = weights::load_weights(*wpath);
+  const ModelConfig cfg = parse_model_config(w.config_json, *wpath + ": attribute config");
+  MaskNet mask(cfg);
+  PoseNet pose(cfg);
+  layers::ParamList mp, pp;
+  mask.params(mp);
+  pose.params(pp);
+  weights::load_group(w, "mask", mp);
+  weights::load_group(w, "pose", pp);
+  mask.weights_changed();
+  pose.weights_changed();
+  mask.set_training(false);
+  pose.set_training(false);
+  h5::silence_errors();
+  std::vector<float> input;
+  std::vector<hsize_t> dims;
+  {
+    h5::H5Id f = h5::open_file(*in);
+    if (!h5::exists(f.get(), "input")) throw UsageError(*in + ": no dataset 'input' (S x C x H x W float32)");
+    h5::H5Id ds = h5::check(H5Dopen2(f.get(), "input", H5P_DEFAULT), *in + ": open input");
+    dims = h5::shape(ds.get());
+    if (dims.size() != 4 || int(dims[1]) != cfg.channels || int(dims[2]) != cfg.height() || int(dims[3]) != cfg.width() ||
+        dims[0] < 1 || dims[0] % cfg.window)
+      throw UsageError(*in + ": input must be S x " + std::to_string(cfg.channels) + " x " + std::to_string(cfg.height()) +
+                       " x " + std::to_string(cfg.width()) + " with S a multiple of the window " + std::to_string(cfg.window));
+    input.resize(dims[0] * dims[1] * dims[2] * dims[3]);
+    h5::check(H5Dread(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, input.data()), *in + ": read input");
+  }
+  const int S = int(dims[0]);
+  layers::Floats xb(std::size_t(S) * ((cfg.channels + 15) / 16) * cfg.height() * cfg.width() * 16);
+  const layers::Act x{xb.data(), S, cfg.channels, cfg.height(), cfg.width()};
+  to_blocked(input, x);
+  mask.forward(x);
+  pose.forward(x, cfg.window);
+  const std::string tmp = *outp + ".tmp-" + std::to_string(::getpid());
+  try {
+    h5::H5Id f = h5::create_file(tmp);
+    auto put = [&](const std::string& name, const layers::Act& a) {
+      const auto v = from_blocked(a);
+      write_dataset(f.get(), name, {hsize_t(a.n), hsize_t(a.c), hsize_t(a.h), hsize_t(a.w)}, v.data());
+    };
+    put("masks", mask.masks());
+    write_dataset(f.get(), "scores", {hsize_t(S), hsize_t(cfg.n_masks)}, mask.scores().data());
+    static const char* planes[3] = {"xy", "zy", "xz"};
+    for (int t = 0; t < cfg.stages; ++t)
+      for (int p = 0; p < 3; ++p) put("heatmaps/stage" + std::to_string(t) + "/" + planes[p], pose.heatmap(t, p));
+    write_dataset(f.get(), "joints_norm", {hsize_t(S), hsize_t(cfg.joints), 3}, pose.joints().data());
+    h5::write_attr_string(f.get(), "config", cfg.json);
+  } catch (...) {
+    std::remove(tmp.c_str());
+    throw;
+  }
+  if (std::rename(tmp.c_str(), outp->c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error("cannot rename " + tmp + " to " + *outp);
+  }
+  out << "wrote " << *outp << ": " << S << " frames, " << cfg.stages << " stages\n";
+  return kOk;
+}
+
+}  // namespace
+
+int cmd_model(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  if (argv.empty()) throw UsageError("model needs a subcommand: summary or forward (see 'yelan model --help')");
+  const std::vector<std::string> rest(argv.begin() + 1, argv.end());
+  try {
+    if (argv[0] == "summary") return summary(Args("model summary", rest, {"--config"}, {"--json"}), out);
+    if (argv[0] == "forward") return forward(Args("model forward", rest, {"--weights", "--input", "--output"}, {}), out);
+  } catch (const ConfigError& e) {
+    err << "yelan: error: " << e.what() << "\n";
+    return kUsageError;
+  } catch (const weights::WeightsError& e) {
+    std::istringstream lines(e.what());
+    for (std::string line; std::getline(lines, line);) err << "yelan: error: " << line << "\n";
+    return kUsageError;
+  } catch (const camera::h5::H5Failure& e) {
+    err << "yelan: error: " << e.what() << "\n";
+    return kUsageError;
+  }
+  throw UsageError("unknown model subcommand '" + argv[0] + "' (summary, forward)");
+}
+
+int weights_init(const std::vector<std::string>& argv, std::ostream& out) {
+  const Args a("weights init", argv, {"--config", "--seed", "-o"}, {});
+  a.expect_positionals(0, 0);
+  const auto name = a.value("--config"), o = a.value("-o");
+  if (!name || !o) throw UsageError("weights init needs --config NAME|FILE --seed N -o W.h5");
+  const int seed = a.int_value_or("--seed", 0, 0, 2147483647);
+  ModelConfig cfg;
+  try {
+    cfg = load_model_config(*name);
+  } catch (const ConfigError& e) {
+    throw UsageError(e.what());
+  }
+  MaskNet mask(cfg);
+  PoseNet pose(cfg);
+  mask.init(std::uint64_t(seed) * 2 + 1);
+  pose.init(std::uint64_t(seed) * 2 + 2);
+  layers::ParamList mp, pp;
+  mask.params(mp);
+  pose.params(pp);
+  weights::randomise_batchnorm(mp, std::uint64_t(seed) * 2 + 3);
+  weights::randomise_batchnorm(pp, std::uint64_t(seed) * 2 + 4);
+  weights::Weights w;
+  w.config_json = cfg.json;
+  w.groups["mask"] = weights::group_of(mp);
+  w.groups["pose"] = weights::group_of(pp);
+  weights::save_weights(*o, w);
+  out << "wrote " << *o << ": config " << cfg.name << ", seed " << seed << ", " << count(mp, true) << " + " << count(pp, true)
+      << " parameters\n";
+  return kOk;
+}
+
+}  // namespace yelan::cli

@@ -1,0 +1,22 @@
+// Between a weights file and the C++ networks: copy a group into a network's parameters
+// (every name and shape checked both ways), collect a network's parameters into a group,
+// and PyTorch-style random initialisation with non-trivial BN statistics.
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "layers/param.h"
+#include "weights_tools/weights_file.h"
+
+namespace yelan::weights {
+
+// Throws WeightsError listing missing, unexpected and mis-shaped tensors (at most 20 each).
+void load_group(const Weights& w, const std::string& group, layers::ParamList& params);
+std::map<std::string, Tensor> group_of(const layers::ParamList& params);
+// BN running statistics and affine parameters drawn away from their defaults (means
+// N(0, 0.1), variances U(0.5, 1.5), weights U(0.75, 1.25), biases U(-0.1, 0.1),
+// num_batches_tracked U{1..9999}), so that a forward pass depends on every BN tensor.
+void randomise_batchnorm(layers::ParamList& params, std::uint64_t seed);
+
+}  // namespace yelan::weights
