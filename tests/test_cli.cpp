@@ -8,21 +8,15 @@
 #include "engine/threads.h"
 #include "kernels/cpu.h"
 #include "test_util.h"
+#include "cli_util.h"
 
 using yelan::cli::Args;
 using yelan::cli::UsageError;
 
 namespace {
-struct Result {
-  int code;
-  std::string out, err;
-};
-Result cli(std::vector<std::string> argv) {
-  std::ostringstream out, err;
-  int code = yelan::cli::run(argv, out, err);
-  return {code, out.str(), err.str()};
-}
-bool has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+using Result = yelan::test::CliResult;
+Result cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
+bool has(const std::string& s, const std::string& what) { return yelan::test::contains(s, what); }
 }  // namespace
 
 TEST_CASE("yelan --version names the version, the chosen ISA and the CPU features", "[cli]") {

@@ -9,19 +9,13 @@
 #include <sstream>
 
 #include "engine/cli/cli.h"
+#include "cli_util.h"
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-Result cli(std::vector<std::string> argv) {
-  std::ostringstream out, err;
-  const int code = yelan::cli::run(argv, out, err);
-  return {code, out.str(), err.str()};
-}
-bool has(const std::string& s, const std::string& w) { return s.find(w) != std::string::npos; }
+using Result = yelan::test::CliResult;
+Result cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
+bool has(const std::string& s, const std::string& w) { return yelan::test::contains(s, w); }
 
 std::string slurp(const std::string& path) {
   std::ifstream f(path, std::ios::binary);

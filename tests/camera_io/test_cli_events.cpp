@@ -7,19 +7,13 @@
 #include "engine/cli/cli.h"
 #include "io_test_util.h"
 #include "test_util.h"
+#include "cli_util.h"
 
 using namespace yelan::test;
 
 namespace {
-struct Run {
-  int code;
-  std::string out, err;
-};
-Run cli(std::vector<std::string> argv) {
-  std::ostringstream out, err;
-  int code = yelan::cli::run(argv, out, err);
-  return {code, out.str(), err.str()};
-}
+using Run = yelan::test::CliResult;
+Run cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
 bool has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
 }  // namespace
 

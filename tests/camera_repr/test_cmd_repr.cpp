@@ -11,21 +11,15 @@
 #include "camera/io/event_reader.h"
 #include "engine/cli/cli.h"
 #include "test_util.h"
+#include "cli_util.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-  int code;
-  std::string out, err;
-};
-Result yelan_cli(std::vector<std::string> argv) {
-  std::ostringstream out, err;
-  const int code = yelan::cli::run(argv, out, err);
-  return {code, out.str(), err.str()};
-}
-bool has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+using Result = yelan::test::CliResult;
+Result yelan_cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
+bool has(const std::string& s, const std::string& what) { return yelan::test::contains(s, what); }
 
 // A fresh directory per test case, removed at the end.
 struct TempDir {

@@ -15,6 +15,7 @@
 #include "camera/usb/recorder.h"
 #include "engine/cli/cli.h"
 #include "usb_test_util.h"
+#include "cli_util.h"
 
 using namespace yelan::camera::usb;
 using yelan::camera::Event;
@@ -48,15 +49,8 @@ bool camera_attached() {
   return v && *v && std::string(v) != "0";
 }
 
-struct CliResult {
-  int code;
-  std::string out, err;
-};
-CliResult cli(std::vector<std::string> argv) {
-  std::ostringstream out, err;
-  int code = yelan::cli::run(argv, out, err);
-  return {code, out.str(), err.str()};
-}
+using yelan::test::CliResult;
+CliResult cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
 
 }  // namespace
 

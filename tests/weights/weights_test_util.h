@@ -13,6 +13,7 @@
 
 #include "engine/cli/cli.h"
 #include "weights_tools/weights_file.h"
+#include "cli_util.h"
 
 namespace yelan::test {
 
@@ -38,16 +39,9 @@ struct TempDir {
   }
 };
 
-struct CliResult {
-  int code;
-  std::string out, err;
-};
-inline CliResult yelan_cli(std::vector<std::string> argv) {
-  std::ostringstream out, err;
-  const int code = yelan::cli::run(argv, out, err);
-  return {code, out.str(), err.str()};
-}
-inline bool has(const std::string& s, const std::string& what) { return s.find(what) != std::string::npos; }
+using yelan::test::CliResult;
+inline CliResult yelan_cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
+inline bool has(const std::string& s, const std::string& what) { return yelan::test::contains(s, what); }
 
 inline std::string fixture(const std::string& name) {
   return (fs::path(__FILE__).parent_path() / "data" / name).string();
