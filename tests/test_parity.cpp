@@ -275,3 +275,88 @@ TEST_CASE("training-mode losses and every gradient match PyTorch (tiny config)",
   CHECK(conditioned >= 150);  // the strict 1e-4 check must cover many tensors (277 of 1348 here)
   std::filesystem::remove_all(dir);
 }
+
+#include "engine/adam.h"
+
+// 20 Adam steps. Adam normalises each gradient element, so elements whose float32 gradient
+// is rounding noise (see the gradient test above) take full-size steps of arbitrary sign:
+// float32 training drifts from exact training by itself. PyTorch float32 drifts from
+// PyTorch float64 by up to 6e-3 in the pose loss over these 20 steps (and by 6e-5 in the
+// mask loss). So: the mask net within 1e-3 of PyTorch at every step; the pose net within
+// 1e-5 for the first 3 steps and, over all 20, no farther from float64 than 3x PyTorch's
+// own float32 drift.
+TEST_CASE("20 training steps from the same weights and batches give PyTorch's losses", "[parity]") {
+  require_torch();
+  const auto dir = std::filesystem::temp_directory_path() / ("yelan-train-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string cs = (dir / "tiny.h5").string(), ws = (dir / "tiny.weights.h5").string(),
+                    t32 = (dir / "train32.h5").string(), t64 = (dir / "train64.h5").string();
+  const std::string train = "/usr/bin/python3 weights_tools/make_train_case.py --weights '" + ws + "' --steps 20 --seed 9";
+  const std::string cmd = "cd '" + source_dir() + "' && /usr/bin/python3 weights_tools/make_parity_case.py --config tiny --seed 13 -o '" +
+                          cs + "' > /dev/null && " + train + " -o '" + t32 + "' > /dev/null && " + train + " --double -o '" +
+                          t64 + "' > /dev/null";
+  INFO(cmd);
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  const weights::Weights w = weights::load_weights(ws);
+  const ModelConfig cfg = load_model_config("tiny");
+  MaskNet mask(cfg);
+  PoseNet pose(cfg);
+  layers::ParamList mp, pp;
+  mask.params(mp);
+  pose.params(pp);
+  load_group(w, "mask", mp);
+  load_group(w, "pose", pp);
+  mask.weights_changed();
+  pose.weights_changed();
+  mask.set_training(true);
+  pose.set_training(true);
+  AdamOptions opt;
+  opt.lr = 1e-3;
+  opt.weight_decay = 1e-5;
+  Adam adam_mask(mp, opt), adam_pose(pp, opt);
+  const Array m32 = read_dataset(t32, "loss_mask"), p32 = read_dataset(t32, "loss_pose");
+  const Array m64 = read_dataset(t64, "loss_mask"), p64 = read_dataset(t64, "loss_pose");
+  REQUIRE(m32.data.size() == 20);
+  double pose_ours = 0, pose_torch = 0, mask_worst = 0;
+  for (int step = 0; step < 20; ++step) {
+    const std::string g = "step" + std::to_string(step) + "/";
+    auto x = to_act(read_dataset(t32, g + "input"));
+    auto labels = to_act(read_dataset(t32, g + "labels"));
+    const Array target = read_dataset(t32, g + "target"), valid = read_dataset(t32, g + "valid");
+
+    adam_mask.zero_grad();
+    mask.forward(x.act);
+    yelan::test::Owned dmasks(mask.masks());
+    std::vector<float> dscores;
+    const double lm = mask_loss(mask, labels.act, dmasks.act, dscores).total;
+    mask.backward(x.act, dmasks.act, dscores.data());
+    adam_mask.step();
+    mask.weights_changed();
+
+    adam_pose.zero_grad();
+    pose.forward(x.act, cfg.window);
+    std::vector<std::array<layers::Act, 3>> dheat;
+    std::vector<layers::Floats> store;
+    const double lp = hpe_loss(pose, cfg.stages, target.data.data(), valid.data.data(), dheat, store).total;
+    pose.backward(x.act, dheat, nullptr);
+    adam_pose.step();
+    pose.weights_changed();
+
+    auto rel = [](double a, double b) { return std::abs(a - b) / std::abs(b); };
+    const double em = std::max(rel(lm, m32.data[step]), rel(lm, m64.data[step]));
+    const double ep = rel(lp, p64.data[step]), ep_torch = rel(p32.data[step], p64.data[step]);
+    std::printf("train parity step %2d: mask ours %.7f torch %.7f; pose ours %.7f torch32 %.7f torch64 %.7f "
+                "(ours vs 64: %.2g, torch32 vs 64: %.2g)\n",
+                step, lm, m32.data[step], lp, p32.data[step], p64.data[step], ep, ep_torch);
+    INFO("step " << step);
+    CHECK(em <= 1e-3);
+    if (step < 3) CHECK(ep <= 1e-5);
+    mask_worst = std::max(mask_worst, em);
+    pose_ours = std::max(pose_ours, ep);
+    pose_torch = std::max(pose_torch, ep_torch);
+  }
+  std::printf("train parity: mask loss worst %.3g; pose loss vs float64 worst %.3g (PyTorch float32: %.3g)\n", mask_worst,
+              pose_ours, pose_torch);
+  CHECK(pose_ours <= std::max(1e-3, 3 * pose_torch));
+  std::filesystem::remove_all(dir);
+}
