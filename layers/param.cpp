@@ -1,5 +1,6 @@
 #include "layers/param.h"
 
+#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -8,12 +9,26 @@
 
 namespace yelan::layers {
 
-void Floats::Free::operator()(float* p) const { std::free(p); }
+namespace {
+std::atomic<std::size_t> g_live{0}, g_peak{0};
+}  // namespace
+
+std::size_t floats_live_bytes() { return g_live.load(); }
+std::size_t floats_peak_bytes() { return g_peak.load(); }
+void reset_floats_peak() { g_peak.store(g_live.load()); }
+
+void Floats::Free::operator()(float* p) const {
+  g_live.fetch_sub(bytes);
+  std::free(p);
+}
 
 Floats::Floats(std::size_t n) : n_(n) {
   const std::size_t bytes = (std::max<std::size_t>(n, 1) * sizeof(float) + 63) / 64 * 64;
-  p_.reset(static_cast<float*>(std::aligned_alloc(64, bytes)));
-  if (!p_) throw std::bad_alloc();
+  float* mem = static_cast<float*>(std::aligned_alloc(64, bytes));
+  if (!mem) throw std::bad_alloc();
+  p_ = std::unique_ptr<float, Free>(mem, Free{bytes});
+  const std::size_t now = g_live.fetch_add(bytes) + bytes;
+  for (std::size_t peak = g_peak.load(); now > peak && !g_peak.compare_exchange_weak(peak, now);) {}
   zero();
 }
 

@@ -8,6 +8,13 @@
 
 namespace yelan::layers {
 
+// Bytes held by every live Floats (parameters, gradients, packed weights, activations),
+// and the most held at once since the last reset: the networks' memory, as
+// `yelan bench networks` reports it.
+std::size_t floats_live_bytes();
+std::size_t floats_peak_bytes();
+void reset_floats_peak();
+
 // A 64-byte aligned float array (layers may not depend on engine/, so not a Tensor).
 class Floats {
  public:
@@ -22,6 +29,7 @@ class Floats {
 
  private:
   struct Free {
+    std::size_t bytes;  // no default initializer: it would not be usable inside Floats
     void operator()(float* p) const;
   };
   std::unique_ptr<float, Free> p_;

@@ -120,3 +120,11 @@ TEST_CASE("yelan model forward writes every head for an input window", "[cli][mo
   CHECK(bad.code == 2);
   CHECK_FALSE(std::filesystem::exists(dir / "x.h5"));
 }
+
+TEST_CASE("yelan bench networks refuses bad usage", "[cli][model]") {
+  const Result r = cli({"bench", "networks", "--configs", "no-such"});
+  CHECK(r.code == 2);
+  CHECK(has(r.err, "no config 'no-such'"));
+  CHECK(cli({"bench", "networks", "--threads-list", "0"}).code == 2);
+  CHECK(cli({"bench", "nothing"}).code == 2);
+}

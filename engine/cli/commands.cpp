@@ -63,6 +63,7 @@ const std::vector<Command>& commands() {
        "usage: yelan bench kernels [--quick] [--json] [--isa-list avx2,avx512] [--threads-list 1,2]\n"
        "                          [--reps N] [--only NAME] [--chart FILE.svg] [--from RESULTS.json]\n"
        "       yelan bench events [--json]\n"
+       "       yelan bench networks [--configs paper,small,tiny] [--threads-list 1,2] [--window W] [--json]\n"
        "\n"
        "kernels: every convolution shape of the networks (forward, backward-data,\n"
        "backward-weights) per ISA and thread count, with GFLOP/s and % of the FMA peak\n"
