@@ -74,6 +74,26 @@ yelan::test::Owned to_act(const Array& a) {
   return o;
 }
 
+// Both networks of a config, holding a weights file's tensors.
+struct Nets {
+  MaskNet mask;
+  PoseNet pose;
+  layers::ParamList mp, pp;
+  Nets(const ModelConfig& cfg, const weights::Weights& w, bool training) : mask(cfg), pose(cfg) {
+    mask.params(mp);
+    pose.params(pp);
+    load_group(w, "mask", mp);
+    load_group(w, "pose", pp);
+    weights_changed();
+    mask.set_training(training);
+    pose.set_training(training);
+  }
+  void weights_changed() {
+    mask.weights_changed();
+    pose.weights_changed();
+  }
+};
+
 // max |ours - ref| / max |ref| over a blocked activation against an NCHW reference.
 double rel_error(const layers::Act& ours, const Array& ref) {
   REQUIRE(ref.dims.size() == 4);
@@ -127,19 +147,10 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs", "[
                             name + "' --seed 7 -o '" + cs + "' > /dev/null";
     INFO(cmd);
     REQUIRE(std::system(cmd.c_str()) == 0);
-    const weights::Weights w = weights::load_weights((dir / (stem + ".weights.h5")).string());
     const ModelConfig cfg = load_model_config(name);
-    MaskNet mask(cfg);
-    PoseNet pose(cfg);
-    layers::ParamList mp, pp;
-    mask.params(mp);
-    pose.params(pp);
-    load_group(w, "mask", mp);
-    load_group(w, "pose", pp);
-    mask.weights_changed();
-    pose.weights_changed();
-    mask.set_training(false);
-    pose.set_training(false);
+    Nets nets(cfg, weights::load_weights((dir / (stem + ".weights.h5")).string()), false);
+    MaskNet& mask = nets.mask;
+    PoseNet& pose = nets.pose;
     auto x = to_act(read_dataset(cs, "input"));
     mask.forward(x.act);
     pose.forward(x.act, cfg.window);
@@ -215,19 +226,10 @@ TEST_CASE("training-mode losses and every gradient match PyTorch (tiny config)",
                             g64 + "' > /dev/null";
     INFO(cmd);
     REQUIRE(std::system(cmd.c_str()) == 0);
-    const weights::Weights w = weights::load_weights(ws);
     const ModelConfig cfg = load_model_config("tiny");
-    MaskNet mask(cfg);
-    PoseNet pose(cfg);
-    layers::ParamList mp, pp;
-    mask.params(mp);
-    pose.params(pp);
-    load_group(w, "mask", mp);
-    load_group(w, "pose", pp);
-    mask.weights_changed();
-    pose.weights_changed();
-    mask.set_training(!eval_mode);
-    pose.set_training(!eval_mode);
+    Nets nets(cfg, weights::load_weights(ws), !eval_mode);
+    MaskNet& mask = nets.mask;
+    PoseNet& pose = nets.pose;
     auto x = to_act(read_dataset(g32, "input"));
     auto labels = to_act(read_dataset(g32, "labels"));
     const Array target = read_dataset(g32, "target"), valid = read_dataset(g32, "valid");
@@ -248,7 +250,7 @@ TEST_CASE("training-mode losses and every gradient match PyTorch (tiny config)",
                 ml.total, lm, hl.total, lp);
     CHECK(std::abs(ml.total - lm) <= 1e-5 * std::abs(lm));
     CHECK(std::abs(hl.total - lp) <= 1e-5 * std::abs(lp));
-    for (auto [group, params] : {std::pair{"mask", &mp}, std::pair{"pose", &pp}}) {
+    for (auto [group, params] : {std::pair{"mask", &nets.mp}, std::pair{"pose", &nets.pp}}) {
       for (auto& p : *params) {
         const std::string key = std::string(group) + "/" + p.key;
         if (!p.param->trainable) {
@@ -309,23 +311,14 @@ TEST_CASE("20 training steps from the same weights and batches give PyTorch's lo
                           t64 + "' > /dev/null";
   INFO(cmd);
   REQUIRE(std::system(cmd.c_str()) == 0);
-  const weights::Weights w = weights::load_weights(ws);
   const ModelConfig cfg = load_model_config("tiny");
-  MaskNet mask(cfg);
-  PoseNet pose(cfg);
-  layers::ParamList mp, pp;
-  mask.params(mp);
-  pose.params(pp);
-  load_group(w, "mask", mp);
-  load_group(w, "pose", pp);
-  mask.weights_changed();
-  pose.weights_changed();
-  mask.set_training(true);
-  pose.set_training(true);
+  Nets nets(cfg, weights::load_weights(ws), true);
+  MaskNet& mask = nets.mask;
+  PoseNet& pose = nets.pose;
   AdamOptions opt;
   opt.lr = 1e-3;
   opt.weight_decay = 1e-5;
-  Adam adam_mask(mp, opt), adam_pose(pp, opt);
+  Adam adam_mask(nets.mp, opt), adam_pose(nets.pp, opt);
   const Array m32 = read_dataset(t32, "loss_mask"), p32 = read_dataset(t32, "loss_pose");
   const Array m64 = read_dataset(t64, "loss_mask"), p64 = read_dataset(t64, "loss_pose");
   REQUIRE(m32.data.size() == 20);
