@@ -8,6 +8,7 @@
 #include <optional>
 #include <system_error>
 
+#include "camera/io/h5.h"
 #include "weights_tools/json.h"
 
 namespace yelan::weights {
@@ -15,40 +16,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Owns one hid_t of any kind.
-class Id {
- public:
-  Id() = default;
-  explicit Id(hid_t id) : id_(id) {}
-  Id(Id&& o) noexcept : id_(o.id_) { o.id_ = H5I_INVALID_HID; }
-  Id& operator=(Id&& o) noexcept {
-    std::swap(id_, o.id_);
-    return *this;
-  }
-  Id(const Id&) = delete;
-  Id& operator=(const Id&) = delete;
-  ~Id() { reset(); }
-  void reset() noexcept {
-    if (id_ >= 0 && H5Iis_valid(id_) > 0) {
-      switch (H5Iget_type(id_)) {
-        case H5I_FILE: H5Fclose(id_); break;
-        case H5I_GROUP: H5Gclose(id_); break;
-        case H5I_DATASET: H5Dclose(id_); break;
-        case H5I_DATASPACE: H5Sclose(id_); break;
-        case H5I_DATATYPE: H5Tclose(id_); break;
-        case H5I_ATTR: H5Aclose(id_); break;
-        case H5I_GENPROP_LST: H5Pclose(id_); break;
-        default: H5Idec_ref(id_); break;
-      }
-    }
-    id_ = H5I_INVALID_HID;
-  }
-  hid_t get() const { return id_; }
-  bool ok() const { return id_ >= 0; }
-
- private:
-  hid_t id_ = H5I_INVALID_HID;
-};
+// Owns one hid_t of any kind (camera/io's handle: one wrapper for the project).
+using Id = camera::h5::H5Id;
 
 void quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
