@@ -15,7 +15,6 @@ constexpr double kMaxSubstep = 1e-3;      // s: keeps h * sqrt(k) below 0.013 fo
 constexpr double kRestartGap = 0.25;      // s: a longer step is a cut, not motion
 constexpr double kMaxFollowSpeed = 4000;  // mm/s, see damp_against()
 constexpr double kMaxYawRate = 40;        // rad/s, beyond any pirouette
-constexpr double kMaxFlare = 1.2;         // rad, cone half-angle of a fully flared skirt
 constexpr std::uint64_t kStreamSprings = 0xb0d7'0001, kStreamPrints = 0xb0d7'0002;
 
 Vec3 safe_normalized(const Vec3& v, const Vec3& fallback) {
@@ -69,11 +68,11 @@ Dresser::Dresser(const Character& character, std::uint64_t seed)
   d.head_depth = 0.056 * H * (0.9 + 0.1 * g);
   d.jaw_r = 0.020 * H * (0.85 + 0.15 * g);
   d.neck_r = (f ? 0.030 : 0.034) * H * (0.75 + 0.25 * g);
-  d.chest_lat_per_shoulder = (f ? 0.40 : 0.44) * (0.75 + 0.25 * g);
+  d.chest_lat_per_shoulder = (f ? 0.34 : 0.36) * (0.75 + 0.25 * g);
   d.chest_depth = 0.065 * H * g;
   d.belly_lat = (f ? 0.074 : 0.082) * H * (0.55 + 0.45 * g);
   d.belly_depth = (f ? 0.056 : 0.058) * H * g;
-  d.pelvis_lat_extra = (f ? 0.062 : 0.045) * H * (0.6 + 0.4 * g);
+  d.pelvis_lat_extra = (f ? 0.052 : 0.045) * H * (0.6 + 0.4 * g);
   d.pelvis_depth = (f ? 0.066 : 0.060) * H * g;
   d.pelvis_up = 0.070 * H;
   d.upper_arm_r0 = 0.029 * H * limb;
@@ -95,10 +94,11 @@ Dresser::Dresser(const Character& character, std::uint64_t seed)
   // Loose cloth: attachment height on the hips' axis, radius there, slant length to the
   // hem and the hem radius at rest.
   Hem& hem = hem_;
-  const double hip_half_width = 0.05 * H;  // half the hip-joint spacing of an average body
+  // Half the hip-joint spacing (as motion.cpp's proportions have it).
+  const double hip_half_width = (f ? 0.060 : 0.055) * H;
   const double pelvis_lat = hip_half_width + d.pelvis_lat_extra;
   const double hip_ra = 1.05 * std::max(pelvis_lat, hip_half_width + d.thigh_r0);
-  double axis_length = 0, rb = 0, k = 60, zeta = 0.8;
+  double axis_length = 0, rb = 0, k = 60, zeta = 0.8, max_flare = 1.0;
   switch (character.clothing) {
     case Clothing::tight: break;
     case Clothing::loose_shirt:
@@ -108,11 +108,13 @@ Dresser::Dresser(const Character& character, std::uint64_t seed)
       rb = 1.10 * pelvis_lat;
       k = 150;
       zeta = 0.7;
+      max_flare = 0.35;
       break;
     case Clothing::long_coat:
       hem.ra = hip_ra;
       axis_length = 0.29 * H;
       rb = 1.25 * hip_ra;
+      max_flare = 0.5;  // heavy cloth
       break;
     case Clothing::dress:
       hem.ra = hip_ra;
@@ -130,6 +132,7 @@ Dresser::Dresser(const Character& character, std::uint64_t seed)
     rb = std::max(rb, hem.ra);
     hem.length = std::hypot(axis_length, rb - hem.ra);
     hem.rest_angle = std::atan2(rb - hem.ra, axis_length);
+    hem.max_angle = std::max(max_flare, hem.rest_angle);
     hem.k = k * hem_scale;
     hem.c = 2 * zeta * std::sqrt(hem.k);
   }
@@ -168,10 +171,42 @@ void Dresser::hem_targets(Vec3& centre, double& radius, double yaw_rate) const {
   const double w2 = yaw_rate * yaw_rate;
   for (int i = 0; i < 4 && w2 > 0; ++i) {
     const double r = hem_.ra + hem_.length * std::sin(angle);
-    angle = std::clamp(std::atan(w2 * r / kGravity), hem_.rest_angle, kMaxFlare);
+    angle = std::clamp(std::atan(w2 * r / kGravity), hem_.rest_angle, hem_.max_angle);
   }
-  centre = top + down * (hem_.length * std::cos(angle));
+  const double depth = hem_.length * std::cos(angle);
+  centre = top + down * depth;
   radius = hem_.ra + hem_.length * std::sin(angle);
+
+  // The legs push the cloth: where both cross the hem's level, the ring moves over their
+  // midpoint (at most half its length) and opens wide enough to hold them.
+  const Dims& d = dims_;
+  Vec3 leg[2];
+  double leg_r[2];
+  for (int side = 0; side < 2; ++side) {
+    const Vec3 chain[3] = {pose_.p[kHipR + side], pose_.p[kKneeR + side], pose_.p[kAnkleR + side]};
+    const double r[3] = {d.thigh_r0, d.thigh_r1, d.shin_r1};
+    bool found = false;
+    for (int s = 0; s < 2 && !found; ++s) {
+      const double b0 = (chain[s] - top).dot(down), b1 = (chain[s + 1] - top).dot(down);
+      if ((b0 - depth) * (b1 - depth) > 0 || b0 == b1) continue;
+      const double f = (depth - b0) / (b1 - b0);
+      leg[side] = chain[s] + f * (chain[s + 1] - chain[s]);
+      leg_r[side] = r[s] + f * (r[s + 1] - r[s]);
+      found = true;
+    }
+    if (!found) return;  // a leg lifted above the hem does not hold the cloth open
+  }
+  Vec3 shift = 0.5 * (leg[0] + leg[1]) - centre;
+  shift -= down * shift.dot(down);
+  const double most = 0.5 * hem_.length, n = shift.norm();
+  if (n > most) shift *= most / n;
+  centre += shift;
+  for (int side = 0; side < 2; ++side) {
+    Vec3 off = leg[side] - centre;
+    off -= down * off.dot(down);
+    radius = std::max(radius, off.norm() + leg_r[side] + 8.0);
+  }
+  radius = std::min(radius, hem_.ra + hem_.length);
 }
 
 Vec3 Dresser::hair_anchor() const {
@@ -287,19 +322,22 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
   const Character& ch = character_;
   const Clothing cl = ch.clothing;
   int slot = 0;
-  auto push = [&](Shape shape, const Material& m, const Vec3& origin, const Vec3& u,
-                  const Vec3& v) -> Primitive& {
+  // Pattern frame of a part: stripes vary along u, so u runs along the part's long axis for
+  // hoops around it, or across it for stripes along it.
+  auto push = [&](Shape shape, const Material& m, const Vec3& origin, const Vec3& along,
+                  const Vec3& across) -> Primitive& {
     Primitive& q = out.emplace_back();
     q.shape = shape;
     q.human = true;
-    q.material = dressed(m, origin, u, v, print_seeds_[slot++]);
+    q.material = ch.stripes_along ? dressed(m, origin, across, along, print_seeds_[slot])
+                                  : dressed(m, origin, along, across, print_seeds_[slot]);
+    ++slot;
     return q;
   };
-  // Round cone whose pattern runs along the bone; u is `across` made perpendicular to it.
   auto cone = [&](const Vec3& a, const Vec3& b, double ra, double rb, const Material& m,
                   const Vec3& across) {
-    const Vec3 v = safe_normalized(b - a, Vec3::UnitZ());
-    Primitive& q = push(Shape::round_cone, m, a, perpendicular_part(across, v), v);
+    const Vec3 along = safe_normalized(b - a, Vec3::UnitZ());
+    Primitive& q = push(Shape::round_cone, m, a, along, perpendicular_part(across, along));
     q.a = a;
     q.b = b;
     q.ra = ra;
@@ -307,7 +345,7 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
   };
   auto ellipsoid = [&](const Vec3& c, const Axes& ax, double s_lat, double s_fwd, double s_up,
                        const Material& m, const Vec3& origin) {
-    Primitive& q = push(Shape::ellipsoid, m, origin, ax.lat, ax.up);
+    Primitive& q = push(Shape::ellipsoid, m, origin, ax.up, ax.lat);
     q.a = c;
     q.axes.col(0) = ax.lat * s_lat;
     q.axes.col(1) = ax.fwd * s_fwd;
@@ -319,7 +357,7 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
   const Material& torso_m = ch.top;
   const Material& upper_arm_m = cl == Clothing::dress ? ch.skin : ch.top;
   const Material& forearm_m = coat ? ch.top : ch.skin;
-  const Material& pelvis_m = cl == Clothing::dress ? ch.top : ch.bottom;
+  const Material& pelvis_m = cl == Clothing::dress || coat ? ch.top : ch.bottom;
   const Material& leg_m = cl == Clothing::skirt ? ch.skin : ch.bottom;
   const double torso_scale = coat ? 1.08 : loose ? 1.06 : 1.0;
   const double sleeve = coat ? 10.0 : loose ? 8.0 : 0.0;  // mm of cloth over the arm
@@ -334,19 +372,30 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
   const double hip_half_width = 0.5 * (p[kHipL] - p[kHipR]).norm();
   const double spine_upper = (p[kNeck] - p[kChest]).norm();
   const double spine_lower = (p[kChest] - p[kPelvis]).norm();
-  ellipsoid(p[kChest] + 0.45 * (p[kNeck] - p[kChest]), torso_,
+  // The chest and belly overlap deeply so the trunk has no waist notch where they meet.
+  ellipsoid(p[kChest] + 0.5 * (p[kNeck] - p[kChest]), torso_,
             torso_scale * d.chest_lat_per_shoulder * shoulder_width,
-            torso_scale * d.chest_depth, 0.7 * spine_upper, torso_m, p[kPelvis]);
-  ellipsoid(0.5 * (p[kChest] + p[kPelvis]), hips_, torso_scale * d.belly_lat,
-            torso_scale * d.belly_depth, 0.65 * spine_lower, torso_m, p[kPelvis]);
+            torso_scale * d.chest_depth, 0.62 * spine_upper, torso_m, p[kPelvis]);
+  ellipsoid(p[kPelvis] + 0.6 * (p[kChest] - p[kPelvis]), hips_, torso_scale * d.belly_lat,
+            torso_scale * d.belly_depth, 0.9 * spine_lower, torso_m, p[kPelvis]);
+  // Flanks from the armpits to the waist square the trunk seen from the front.
+  for (int side = 0; side < 2; ++side) {
+    const double sign = side == 0 ? -1.0 : 1.0;
+    const double r_waist = 0.8 * torso_scale * d.belly_depth;
+    const Vec3 armpit = p[kNeck] + 0.42 * (p[kShoulderR + side] - p[kNeck]) -
+                        torso_.up * (0.4 * spine_upper);
+    const Vec3 waist = p[kChest] + hips_.lat * (sign * (torso_scale * d.belly_lat - r_waist));
+    cone(armpit, waist, 0.7 * torso_scale * d.chest_depth, r_waist, torso_m, torso_.lat);
+  }
   const double pelvis_scale = coat ? 1.05 : 1.0;
   ellipsoid(p[kPelvis] - hips_.up * (0.1 * d.pelvis_up), hips_,
             pelvis_scale * (hip_half_width + d.pelvis_lat_extra), pelvis_scale * d.pelvis_depth,
             d.pelvis_up, pelvis_m, p[kPelvis]);
 
-  // Shoulder girdle: fills the gap between the chest's rounded top and the upper arms.
-  cone(p[kShoulderR], p[kShoulderL], 0.9 * d.upper_arm_r0 + sleeve,
-       0.9 * d.upper_arm_r0 + sleeve, upper_arm_m, torso_.up);
+  // Shoulders: from the base of the neck, a little raised (the trapezius), to each joint.
+  for (int side = 0; side < 2; ++side)
+    cone(p[kNeck] + torso_.up * (0.15 * spine_upper), p[kShoulderR + side], d.neck_r,
+         0.9 * d.upper_arm_r0 + sleeve, upper_arm_m, torso_.up);
 
   // Arms (right then left), across-axis from the chest so sleeve prints turn with it.
   for (int side = 0; side < 2; ++side) {
@@ -366,7 +415,14 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
     const Vec3& toe = p[kToeR + side];
     cone(hip, knee, d.thigh_r0, d.thigh_r1, leg_m, hips_.fwd);
     cone(knee, ankle, d.shin_r0, d.shin_r1, leg_m, hips_.fwd);
-    cone(ankle - 0.25 * (toe - ankle), toe, d.foot_r0, d.foot_r1, ch.shoes, hips_.lat);
+    // The toe point is the tip on the floor and the ankle sits above the heel: pull the
+    // ends in by their radii so the sole, not the cone's axis, meets the floor.
+    const double foot_len = (toe - ankle).norm();
+    const Vec3 along = safe_normalized(toe - ankle, hips_.fwd);
+    const Vec3 sole_up = perpendicular_part(Vec3::UnitZ(), along);
+    cone(ankle - along * (0.2 * foot_len) - sole_up * (0.8 * d.foot_r0),
+         toe - along * d.foot_r1 + sole_up * d.foot_r1, d.foot_r0, d.foot_r1, ch.shoes,
+         hips_.lat);
   }
 
   // Hair: a cap over the skull (the face stays bare) and the swinging tail.
@@ -394,7 +450,7 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
     const Vec3 top = p[kPelvis] + hips_.up * hem_.top_offset;
     const Material& m = cl == Clothing::skirt ? ch.bottom : ch.top;
     const Vec3 axis = safe_normalized(top - hem_.x, hips_.up);
-    Primitive& q = push(Shape::cone_shell, m, top, perpendicular_part(hips_.lat, axis), axis);
+    Primitive& q = push(Shape::cone_shell, m, top, axis, perpendicular_part(hips_.lat, axis));
     q.a = top;
     q.b = hem_.x;
     q.ra = hem_.ra;

@@ -24,8 +24,8 @@ namespace yelan::camera::sim {
 
 class Dresser {
  public:
-  // Upper bound on what primitives() appends (body 19, hair 4, hat 2, cloth 1).
-  static constexpr int kMaxPrimitives = 26;
+  // Upper bound on what primitives() appends (body 22, hair 4, hat 2, cloth 1).
+  static constexpr int kMaxPrimitives = 29;
 
   Dresser(const Character& character, std::uint64_t seed);
 
@@ -71,6 +71,7 @@ class Dresser {
     double ra = 0;          // radius at the attachment
     double length = 0;      // slant length from attachment to hem at rest
     double rest_angle = 0;  // half-angle of the cone at rest, rad
+    double max_angle = 0;   // fully flared: 1 rad for skirts, less for a coat or shirt
     double k = 0, c = 0;    // stiffness 1/s^2, damping 1/s
     Vec3 x = Vec3::Zero(), v = Vec3::Zero(), target = Vec3::Zero();
     double r = 0, vr = 0, r_target = 0;

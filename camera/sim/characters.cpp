@@ -105,7 +105,11 @@ std::vector<Character> build_cast() {
        plain(0.25f), true},
   };
   std::vector<Character> cast;
-  for (const Spec& s : specs) cast.push_back(make(s));
+  for (const Spec& s : specs) {
+    cast.push_back(make(s));
+    const std::string& n = cast.back().name;
+    cast.back().stripes_along = n == "eli" || n == "ivan" || n == "kurt";
+  }
   return cast;
 }
 

@@ -35,6 +35,9 @@ struct Character {
   bool hat = false;
   // Pattern frames (origin/u/v) are set by the Dresser each sample; here they are unset.
   Material skin, top, bottom, hair_material, hat_material, shoes;
+  // Stripes (and checks' first direction) run along the trunk, limbs and skirt instead of
+  // around them: vertical stripes flicker under turns, hoops under bobbing and swinging.
+  bool stripes_along = false;
   bool test_only = false;  // held out from training data
 };
 

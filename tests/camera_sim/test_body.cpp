@@ -18,27 +18,29 @@ using namespace yelan::camera::sim;
 
 namespace {
 
-// A standing pose for a body of height H facing -y (its left is +x), feet on the floor.
-BodyPose standing_pose(double H) {
+// A standing pose for a body of height H facing -y (its left is +x), feet flat on the
+// floor, with the segment proportions motion.cpp uses (Drillis & Contini).
+BodyPose standing_pose(double H, bool female = false) {
   BodyPose pose;
   auto at = [&](BodyPoint b, double x, double y, double z) { pose.p[b] = Vec3(x, y, z) * H; };
   at(kPelvis, 0, 0, 0.53);
-  at(kChest, 0, 0, 0.65);
-  at(kNeck, 0, 0, 0.82);
+  at(kChest, 0, 0, 0.66);
+  at(kNeck, 0, 0, 0.818);
   at(kHead, 0, 0, 0.935);
   at(kHeadTop, 0, 0, 1.0);
-  at(kNose, 0, -0.055, 0.925);
-  at(kChin, 0, -0.035, 0.875);
+  at(kNose, 0, -0.062, 0.925);
+  at(kChin, 0, -0.040, 0.875);
+  const double shoulder = (female ? 0.245 : 0.259) / 2, hip = (female ? 0.120 : 0.110) / 2;
   for (int side = 0; side < 2; ++side) {
     const double s = side == 0 ? -1 : 1;  // right is -x
-    at(BodyPoint(kShoulderR + side), 0.115 * s, 0, 0.815);
-    at(BodyPoint(kElbowR + side), 0.125 * s, 0, 0.63);
-    at(BodyPoint(kWristR + side), 0.13 * s, 0, 0.48);
-    at(BodyPoint(kHandTipR + side), 0.13 * s, 0, 0.38);
-    at(BodyPoint(kHipR + side), 0.05 * s, 0, 0.52);
-    at(BodyPoint(kKneeR + side), 0.05 * s, 0, 0.285);
-    at(BodyPoint(kAnkleR + side), 0.05 * s, 0, 0.04);
-    at(BodyPoint(kToeR + side), 0.055 * s, -0.08, 0.01);
+    at(BodyPoint(kShoulderR + side), shoulder * s, 0, 0.818);
+    at(BodyPoint(kElbowR + side), (shoulder + 0.01) * s, 0, 0.632);
+    at(BodyPoint(kWristR + side), (shoulder + 0.015) * s, 0, 0.486);
+    at(BodyPoint(kHandTipR + side), (shoulder + 0.015) * s, 0, 0.378);
+    at(BodyPoint(kHipR + side), hip * s, 0, 0.53);
+    at(BodyPoint(kKneeR + side), hip * s, 0, 0.285);
+    at(BodyPoint(kAnkleR + side), hip * s, 0, 0.039);
+    at(BodyPoint(kToeR + side), hip * s, -std::sqrt(0.12 * 0.12 - 0.039 * 0.039), 0);
   }
   return pose;
 }
@@ -80,7 +82,7 @@ std::vector<Primitive> dress_at_rest(const Character& c, const BodyPose& pose,
 }
 
 int expected_count(const Character& c) {
-  return 19 + (c.hair != Hair::bald) + 3 * (c.hair == Hair::long_hair) + 2 * c.hat +
+  return 22 + (c.hair != Hair::bald) + 3 * (c.hair == Hair::long_hair) + 2 * c.hat +
          (c.clothing != Clothing::tight);
 }
 
@@ -165,7 +167,7 @@ TEST_CASE("body cast: lookup by name, unknown names list the known ones") {
 TEST_CASE("body dresser: primitive count per outfit, all human, finite, within the bound") {
   for (const Character& c : characters()) {
     INFO(c.name);
-    const BodyPose pose = standing_pose(c.shape.height_mm);
+    const BodyPose pose = standing_pose(c.shape.height_mm, c.shape.female);
     const auto prims = dress_at_rest(c, pose);
     CHECK(int(prims.size()) == expected_count(c));
     CHECK(int(prims.size()) <= Dresser::kMaxPrimitives);
@@ -192,7 +194,7 @@ TEST_CASE("body dresser: primitive count per outfit, all human, finite, within t
     CHECK(shells == (c.clothing != Clothing::tight));
     // The body stays within its standing height (hat excepted) and above the floor.
     double top = 0;
-    for (int i = 0; i < 19; ++i) {
+    for (int i = 0; i < 22; ++i) {
       const Primitive& q = prims[i];
       if (q.shape == Shape::ellipsoid)
         top = std::max(top, q.a.z() + q.axes.row(2).norm());
@@ -213,7 +215,7 @@ TEST_CASE("body dresser: every DHP19 joint and the bones between them lie inside
   Rng rng(7, 1);
   for (const Character& c : characters()) {
     INFO(c.name);
-    const BodyPose rest = standing_pose(c.shape.height_mm);
+    const BodyPose rest = standing_pose(c.shape.height_mm, c.shape.female);
     // The rest pose, and the same turned and moved, with every point jittered by 15 mm.
     for (int trial = 0; trial < 4; ++trial) {
       BodyPose pose = moved(rest, yaw(trial * 1.3), Vec3(trial * 300.0, -trial * 200.0, 0));
@@ -236,19 +238,26 @@ TEST_CASE("body dresser: every DHP19 joint and the bones between them lie inside
 TEST_CASE("body dresser: hips wider than shoulders for women, chest wider for men") {
   Character a = character_by_name("ben"), b = a;
   b.shape.female = true;
-  const BodyPose pose = standing_pose(a.shape.height_mm);
-  const auto male = dress_at_rest(a, pose), female = dress_at_rest(b, pose);
-  // Slots 3 and 5 are the chest and pelvis ellipsoids; column 0 is the lateral semi-axis.
-  REQUIRE(male[3].shape == Shape::ellipsoid);
-  REQUIRE(male[5].shape == Shape::ellipsoid);
-  const double m_ratio = male[5].axes.col(0).norm() / male[3].axes.col(0).norm();
-  const double f_ratio = female[5].axes.col(0).norm() / female[3].axes.col(0).norm();
-  CHECK(f_ratio > m_ratio * 1.15);
+  const double H = a.shape.height_mm;
+  const BodyPose pose = standing_pose(H);
+  // Slots 3 and 7 are the chest and pelvis ellipsoids; column 0 is the lateral semi-axis.
+  auto hips_over_chest = [](const std::vector<Primitive>& prims) {
+    REQUIRE(prims[3].shape == Shape::ellipsoid);
+    REQUIRE(prims[7].shape == Shape::ellipsoid);
+    return prims[7].axes.col(0).norm() / prims[3].axes.col(0).norm();
+  };
+  const auto male = dress_at_rest(a, pose);
+  const double m_ratio = hips_over_chest(male);
+  // Flesh alone (same skeleton): by hand, (0.055 + 0.052) / (0.34 * 0.259) over
+  // (0.055 + 0.045) / (0.36 * 0.259) = 1.1330.
+  CHECK(hips_over_chest(dress_at_rest(b, pose)) / m_ratio == Approx(1.1330).epsilon(0.001));
+  // With each sex's own skeleton (motion.cpp's shoulder and hip spacing) the gap widens.
+  CHECK(hips_over_chest(dress_at_rest(b, standing_pose(H, true))) > m_ratio * 1.2);
   // Girth widens the flesh around the same bones.
   Character wide = a;
   wide.shape.girth = 1.4;
   const auto w = dress_at_rest(wide, pose);
-  CHECK(w[13].ra == Approx(male[13].ra * 1.4));  // right thigh
+  CHECK(w[16].ra == Approx(male[16].ra * 1.4));  // right thigh
   CHECK(w[4].axes.col(1).norm() == Approx(male[4].axes.col(1).norm() * 1.4));  // belly depth
 }
 
@@ -257,8 +266,9 @@ TEST_CASE("body dresser: texture frames and geometry turn and move with the body
   const Vec3 shift(250, -400, 0);
   for (const char* name : {"ana", "carl", "gus", "kurt"}) {
     INFO(name);
+    if (std::string(name) == "kurt") REQUIRE(character_by_name(name).stripes_along);
     const Character& c = character_by_name(name);
-    const BodyPose rest = standing_pose(c.shape.height_mm);
+    const BodyPose rest = standing_pose(c.shape.height_mm, c.shape.female);
     const auto before = dress_at_rest(c, rest), after = dress_at_rest(c, moved(rest, R, shift));
     REQUIRE(before.size() == after.size());
     for (size_t i = 0; i < before.size(); ++i) {
@@ -273,15 +283,21 @@ TEST_CASE("body dresser: texture frames and geometry turn and move with the body
       CHECK((q.material.u_axis - R * p.material.u_axis).norm() < 1e-9);
       CHECK((q.material.v_axis - R * p.material.v_axis).norm() < 1e-9);
     }
-    // The chest's pattern runs around the torso: u along the shoulders, v up the spine.
-    CHECK((after[3].material.u_axis - R * Vec3::UnitX()).norm() < 1e-9);
-    CHECK((after[3].material.v_axis - Vec3::UnitZ()).norm() < 1e-9);
+    // The chest's stripes vary along u: up the spine (hoops around the torso), or across
+    // the shoulders for characters whose stripes run along the body.
+    const Vec3 spine = Vec3::UnitZ(), shoulders = R * Vec3::UnitX();
+    CHECK((after[3].material.u_axis - (c.stripes_along ? shoulders : spine)).norm() < 1e-9);
+    CHECK((after[3].material.v_axis - (c.stripes_along ? spine : shoulders)).norm() < 1e-9);
+    // A thigh's hoops go round the leg: u down the bone.
+    const Vec3 thigh = (after[16].b - after[16].a).normalized();
+    CHECK((c.stripes_along ? after[16].material.v_axis : after[16].material.u_axis)
+              .dot(thigh) == Approx(1.0));
   }
 }
 
 TEST_CASE("body dresser: the same seed gives identical primitives, another seed other prints") {
   const Character& c = character_by_name("lena");
-  const BodyPose rest = standing_pose(c.shape.height_mm);
+  const BodyPose rest = standing_pose(c.shape.height_mm, c.shape.female);
   auto run = [&](std::uint64_t seed) {
     Dresser d(c, seed);
     std::vector<Primitive> prims;
@@ -311,7 +327,7 @@ TEST_CASE("body dresser: the same seed gives identical primitives, another seed 
 
 TEST_CASE("body springs: a dress hem lags a 200 mm sideways jump, then settles") {
   const Character& c = character_by_name("ana");
-  const BodyPose rest = standing_pose(c.shape.height_mm);
+  const BodyPose rest = standing_pose(c.shape.height_mm, c.shape.female);
   const BodyPose jumped = moved(rest, Eigen::Matrix3d::Identity(), Vec3(200, 0, 0));
   for (double dt : {1e-3, 1e-4, 20e-3}) {
     INFO("dt " << dt);
@@ -351,7 +367,7 @@ TEST_CASE("body springs: a dress hem lags a 200 mm sideways jump, then settles")
 
 TEST_CASE("body springs: long hair trails a head turn and comes back to rest") {
   const Character& c = character_by_name("kurt");
-  const BodyPose rest = standing_pose(c.shape.height_mm);
+  const BodyPose rest = standing_pose(c.shape.height_mm, c.shape.female);
   Dresser d(c, 3);
   d.update(rest, 0.0);
   REQUIRE(d.has_long_hair());
@@ -375,7 +391,7 @@ TEST_CASE("body springs: long hair trails a head turn and comes back to rest") {
 
 TEST_CASE("body springs: a spin flares the skirt out and up, stopping lets it fall back") {
   const Character& c = character_by_name("dana");
-  const BodyPose rest = standing_pose(c.shape.height_mm);
+  const BodyPose rest = standing_pose(c.shape.height_mm, c.shape.female);
   Dresser d(c, 9);
   d.update(rest, 0.0);
   const double r0 = d.hem_radius(), z0 = d.hem_centre().z();
