@@ -30,7 +30,9 @@ enum : std::uint64_t {
   kStreamHot,
   kStreamNoiseWait,
   kStreamNoiseKind,
+  kStreamHotWait,
 };
+constexpr double kRebaseS = 64;  // float seconds stay within 4 us up to here
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument("PixelModel: " + what);
@@ -57,7 +59,7 @@ void validate(const PixelParams& p) {
           "lin_log_knee must be in [1, 1e6]");
 }
 
-// Exponential(1) from a counter draw; never 0, so a pixel's hazard is always positive.
+// Exponential(1) from a counter draw; never 0, so a clock always moves forward.
 double exp1(std::uint64_t seed, std::uint64_t stream, std::uint64_t index) {
   const double u = (double(hash64(seed, stream, index) >> 11) + 0.5) * 0x1.0p-53;
   return -std::log(u);
@@ -68,6 +70,30 @@ std::uint64_t noise_key(std::size_t pixel, std::uint32_t count) {
 }
 
 std::int64_t to_us(double t_s) { return std::llround(t_s * 1e6); }
+
+// The per-pixel hot loop: advances the low-pass and diff of n pixels and flags those that
+// cross a threshold or reach their shot-noise clock (or were flagged already: hot pixels).
+// Flagged pixels keep their old diff for the event pass. Branch-free, so it vectorises.
+int advance_chunk(int n, float dt, float t1_rel, const float* __restrict alpha,
+                  const float* __restrict log, float* __restrict lp, float* __restrict diff,
+                  const float* __restrict on, const float* __restrict off,
+                  const float* __restrict leak, const float* __restrict shot,
+                  float* __restrict delta, int* __restrict flag) {
+  int any = 0;
+  for (int k = 0; k < n; ++k) {
+    const float old = lp[k];
+    const float now = old + alpha[k] * (log[k] - old);
+    const float d = (now - old) + leak[k] * dt;
+    const float dn = diff[k] + d;
+    const int f = flag[k] | (dn >= on[k]) | (dn <= -off[k]) | (shot[k] <= t1_rel);
+    lp[k] = now;
+    diff[k] = f ? diff[k] : dn;
+    delta[k] = d;
+    flag[k] = f;
+    any |= f;
+  }
+  return any;
+}
 
 }  // namespace
 
@@ -122,8 +148,8 @@ PixelModel::PixelModel(int width, int height, const PixelParams& params, std::ui
   thr_on_.resize(n);
   thr_off_.resize(n);
   leak_.resize(n);
-  hazard_.assign(n, std::numeric_limits<double>::infinity());
-  noise_count_.assign(n, 0);
+  next_shot_.assign(n, std::numeric_limits<float>::infinity());
+  shot_count_.assign(n, 0);
   last_event_s_.assign(n, kNever);
   hot_.assign(n, 0);
   hot_row_begin_.assign(std::size_t(height) + 1, 0);
@@ -145,6 +171,8 @@ PixelModel::PixelModel(int width, int height, const PixelParams& params, std::ui
       if (hot_[index(x, y)]) hot_x_.push_back(std::uint16_t(x));
     hot_row_begin_[y + 1] = int(hot_x_.size());
   }
+  hot_next_.assign(hot_x_.size(), std::numeric_limits<double>::infinity());
+  hot_count_.assign(hot_x_.size(), 0);
   row_events_.resize(height);
   row_stats_.resize(height);
   const auto& vm = kernels::vmath_kernels();
@@ -157,8 +185,16 @@ double PixelModel::noise_scale(std::size_t i) const {
   return 0.5 * (params_.pos_threshold / thr_on_[i] + params_.neg_threshold / thr_off_[i]);
 }
 
-void PixelModel::lin_log_chunk(const float* in, int n, float* clamped, float* log) const {
-  const float knee = float(params_.lin_log_knee);
+// Waiting time to the next event of a Poisson clock at `rate`; +inf when it never ticks.
+double PixelModel::draw_wait(std::uint64_t stream, std::size_t pixel, std::uint32_t count,
+                             double rate) const {
+  if (!(rate > 0)) return std::numeric_limits<double>::infinity();
+  return exp1(seed_, stream, noise_key(pixel, count)) / rate;
+}
+
+void PixelModel::lin_log_chunk(const float* __restrict in, int n, float* __restrict clamped,
+                               float* __restrict log) const {
+  const float knee = float(params_.lin_log_knee), slope = lin_slope_;  // locals: no aliasing
   for (int i = 0; i < n; ++i) {
     float c = in[i] > 0.f ? in[i] : 0.f;  // NaN and negatives -> 0
     c = c < kMaxIntensity ? c : kMaxIntensity;
@@ -166,15 +202,18 @@ void PixelModel::lin_log_chunk(const float* in, int n, float* clamped, float* lo
     log[i] = c > knee ? c : knee;
   }
   vlog_(log, log, std::size_t(n));
-  for (int i = 0; i < n; ++i) log[i] = clamped[i] <= knee ? clamped[i] * lin_slope_ : log[i];
+  for (int i = 0; i < n; ++i) {
+    // An arithmetic blend (exact, both terms finite): GCC will not if-convert a select here.
+    const float c = clamped[i], below = float(c <= knee);
+    log[i] = below * (c * slope) + (1.f - below) * log[i];
+  }
 }
 
 void PixelModel::reset(const float* intensity, double t_s) {
   require(intensity != nullptr, "reset: intensity is null");
   require(std::isfinite(t_s), "reset: time is not finite");
-  const bool noisy = params_.shot_noise_rate_hz > 0 ||
-                     (params_.hot_pixel_fraction > 0 && params_.hot_pixel_rate_hz > 0);
   const std::uint64_t epoch = epoch_++;
+  time_base_ = t_s;
   alignas(64) float clamped[kChunk], log[kChunk];
   for (int y = 0; y < height_; ++y) {
     for (int x0 = 0; x0 < width_; x0 += kChunk) {
@@ -189,13 +228,14 @@ void PixelModel::reset(const float* intensity, double t_s) {
         diff_[i] = params_.leak_rate_hz > 0
                        ? float(uniform01(seed_, kStreamLeakPhase ^ (epoch << 40), i)) * thr_on_[i]
                        : 0.f;
-        if (noisy) {
-          hazard_[i] = exp1(seed_, kStreamNoiseWait, noise_key(i, noise_count_[i])) / noise_scale(i);
-          ++noise_count_[i];
-        }
+        const double top = params_.shot_noise_rate_hz * noise_scale(i);
+        next_shot_[i] = float(draw_wait(kStreamNoiseWait, i, shot_count_[i]++, top));
         last_event_s_[i] = kNever;
       }
     }
+    for (int h = hot_row_begin_[y]; h < hot_row_begin_[y + 1]; ++h)
+      hot_next_[h] = t_s + draw_wait(kStreamHotWait, index(hot_x_[h], y), hot_count_[h]++,
+                                     params_.hot_pixel_rate_hz);
   }
   stats_ = PixelStats{};
   ready_ = true;
@@ -209,7 +249,13 @@ void PixelModel::step(const float* intensity, double t0_s, double t1_s, std::vec
               std::to_string(t1_s));
   StepSpan span;
   span.t0_s = t0_s;
+  span.t1_s = t1_s;
   span.dt_s = t1_s - t0_s;
+  span.base_shift_s = 0;
+  if (t1_s - time_base_ > kRebaseS) {
+    span.base_shift_s = t0_s - time_base_;
+    time_base_ = t0_s;
+  }
   const std::int64_t t0_us = to_us(t0_s), t1_us = to_us(t1_s);
   span.hi_us = t1_us;
   span.lo_us = std::min(t0_us + 1, t1_us);
@@ -239,13 +285,15 @@ void PixelModel::step_row(int y, const float* in, const StepSpan& span, std::vec
   // alpha = 1 - exp(gain * (I + floor)): the exact first-order response over dt.
   const float gain = float(-span.dt_s * kTwoPi * p.cutoff_hz / (255 + p.cutoff_floor_dn));
   const float floor_dn = float(p.cutoff_floor_dn);
-  // Shot-noise hazard drop over the step: linear in intensity up to 255.
-  const double shot0 = p.shot_noise_rate_hz * span.dt_s;
-  const double shot_slope = p.shot_noise_rate_hz * (1 - p.shot_noise_bright_factor) / 255 * span.dt_s;
+  const float t1_rel = float(span.t1_s - time_base_);
   const int hot_begin = hot_row_begin_[y], hot_end = hot_row_begin_[y + 1];
+  if (span.base_shift_s != 0)
+    for (int x = 0; x < width_; ++x) {
+      float& c = next_shot_[index(x, y)];
+      c = float(double(c) - span.base_shift_s);
+    }
 
   alignas(64) float clamped[kChunk], log[kChunk], alpha[kChunk], delta[kChunk];
-  alignas(64) double drop[kChunk];
   alignas(64) int flag[kChunk];
   for (int x0 = 0; x0 < width_; x0 += kChunk) {
     const int n = std::min(kChunk, width_ - x0);
@@ -262,40 +310,19 @@ void PixelModel::step_row(int y, const float* in, const StepSpan& span, std::vec
     for (int h = hot_begin; h < hot_end; ++h)  // hot pixels always take the event pass
       if (hot_x_[h] >= x0 && hot_x_[h] < x0 + n) flag[hot_x_[h] - x0] = 1;
 
-    float* __restrict lp = lp_.data() + base;
-    float* __restrict diff = diff_.data() + base;
-    double* __restrict haz = hazard_.data() + base;
-    const float* __restrict on = thr_on_.data() + base;
-    const float* __restrict off = thr_off_.data() + base;
-    const float* __restrict leak = leak_.data() + base;
-    int any = 0;
-    for (int k = 0; k < n; ++k) {
-      const float old = lp[k];
-      const float now = old + alpha[k] * (log[k] - old);
-      const float d = (now - old) + leak[k] * dt;
-      const float dn = diff[k] + d;
-      const double hd = shot0 - shot_slope * double(std::min(clamped[k], 255.f));
-      const double hn = haz[k] - hd;
-      const int f = flag[k] | int(dn >= on[k]) | int(dn <= -off[k]) | int(hn <= 0);
-      lp[k] = now;
-      // Flagged pixels keep their old state for the event pass to advance.
-      diff[k] = f ? diff[k] : dn;
-      haz[k] = f ? haz[k] : hn;
-      delta[k] = d;
-      drop[k] = hd;
-      flag[k] = f;
-      any |= f;
-    }
+    const int any = advance_chunk(n, dt, t1_rel, alpha, log, lp_.data() + base, diff_.data() + base,
+                                  thr_on_.data() + base, thr_off_.data() + base,
+                                  leak_.data() + base, next_shot_.data() + base, delta, flag);
     if (!any) continue;
     for (int k = 0; k < n; ++k)
-      if (flag[k]) pixel_events(x0 + k, y, delta[k], drop[k], span, buf, st);
+      if (flag[k]) pixel_events(x0 + k, y, delta[k], clamped[k], span, buf, st);
   }
 }
 
-// Places one pixel's events inside the step. Two time-ordered sources are merged: the
-// threshold crossings of diff (linear in time over the step: ESIM), and the noise events
-// where the pixel's hazard clock runs out. Every event then passes the refractory check.
-void PixelModel::pixel_events(int x, int y, float delta, double hazard_drop, const StepSpan& span,
+// Places one pixel's events inside the step, merging three time-ordered sources: the
+// threshold crossings of diff (linear in time over the step: ESIM), the pixel's shot-noise
+// clock and, for a hot pixel, its hot clock. Every event then passes the refractory check.
+void PixelModel::pixel_events(int x, int y, float delta, float intensity, const StepSpan& span,
                               std::vector<Event>& buf, RowStats& st) {
   const std::size_t i = index(x, y);
   const float d0 = diff_[i], on = thr_on_[i], off = thr_off_[i];
@@ -303,46 +330,48 @@ void PixelModel::pixel_events(int x, int y, float delta, double hazard_drop, con
   const int dir = rest >= on ? 1 : (rest <= -off ? -1 : 0);
   int crossing = 1;  // index of the next crossing
 
-  // Noise: shot noise at the nominal-threshold rate (scaled into hazard units by the
-  // pixel's noise_scale on each refill), plus the hot-pixel rate for hot pixels.
-  const double scale = noise_scale(i);
-  const double shot_rate = hazard_drop / span.dt_s * scale;  // this pixel's shot events/s
-  const double hot_rate = hot_[i] ? params_.hot_pixel_rate_hz : 0.0;
-  const double total_drop = hazard_drop + hot_rate / scale * span.dt_s;
-  const double hot_share = hot_rate > 0 ? hot_rate / (hot_rate + shot_rate) : 0.0;
-  const double on_share = (1 / on) / (1 / on + 1 / off);
-  double hazard = hazard_[i];  // hazard left at the step's start, plus the refills so far
+  const float t1_rel = float(span.t1_s - time_base_);
+  int hot = -1;
+  for (int h = hot_row_begin_[y]; h < hot_row_begin_[y + 1]; ++h)
+    if (hot_x_[h] == x) hot = h;
 
+  auto fraction = [&](double t) { return (t - span.t0_s) / span.dt_s; };
   for (;;) {
-    double s_sig = 2, s_noise = 2;
+    double s_sig = 2, s_shot = 2, s_hot = 2;
     // delta is nonzero whenever dir is (diff started inside the thresholds).
     if (dir > 0 && rest >= on) s_sig = delta != 0 ? (double(crossing) * on - d0) / delta : 0;
     if (dir < 0 && rest <= -off) s_sig = delta != 0 ? (-double(crossing) * off - d0) / delta : 0;
-    if (total_drop > 0 && hazard <= total_drop) s_noise = hazard / total_drop;
-    if (s_sig > 1.5 && s_noise > 1.5) break;
+    if (next_shot_[i] <= t1_rel) s_shot = fraction(time_base_ + next_shot_[i]);
+    if (hot >= 0 && hot_next_[hot] <= span.t1_s) s_hot = fraction(hot_next_[hot]);
+    if (s_sig > 1.5 && s_shot > 1.5 && s_hot > 1.5) break;
 
     std::uint8_t polarity;
-    enum { kSignal, kShot, kHot } kind;
+    std::uint64_t* counter;
     double s;
-    if (s_sig <= s_noise) {
+    if (s_sig <= s_shot && s_sig <= s_hot) {
       s = s_sig;
-      kind = kSignal;
       polarity = dir > 0;
       rest -= dir > 0 ? on : -off;  // the reference moves even when refractory drops it
       ++crossing;
+      counter = &st.signal;
+    } else if (s_shot <= s_hot) {
+      s = s_shot;
+      const std::uint32_t c = shot_count_[i]++;
+      const double u = uniform01(seed_, kStreamNoiseKind, noise_key(i, c));
+      const double top_rate = params_.shot_noise_rate_hz * noise_scale(i);
+      next_shot_[i] = float(double(next_shot_[i]) + draw_wait(kStreamNoiseWait, i, c + 1, top_rate));
+      // Thinning: a candidate survives with the intensity's share of the dark rate, and is
+      // ON with the pixel's ON share (the lower threshold fires more often).
+      const double keep = shot_noise_rate(intensity, params_) / params_.shot_noise_rate_hz;
+      if (u >= keep) continue;
+      const double on_share = (1 / on) / (1 / on + 1 / off);
+      polarity = u < keep * on_share;
+      counter = &st.shot;
     } else {
-      s = s_noise;
-      const std::uint64_t key = noise_key(i, noise_count_[i]);
-      const double u = uniform01(seed_, kStreamNoiseKind, key);
-      if (u < hot_share) {
-        kind = kHot;
-        polarity = 1;
-      } else {
-        kind = kShot;
-        polarity = (u - hot_share) < on_share * (1 - hot_share);
-      }
-      hazard += exp1(seed_, kStreamNoiseWait, key) / scale;
-      ++noise_count_[i];
+      s = s_hot;
+      hot_next_[hot] += draw_wait(kStreamHotWait, i, hot_count_[hot]++, params_.hot_pixel_rate_hz);
+      polarity = 1;
+      counter = &st.hot;
     }
     s = std::clamp(s, 0.0, 1.0);
     const double t = span.t0_s + s * span.dt_s;
@@ -353,12 +382,9 @@ void PixelModel::pixel_events(int x, int y, float delta, double hazard_drop, con
     last_event_s_[i] = t;
     const std::int64_t t_us = std::clamp(to_us(t), span.lo_us, span.hi_us);
     buf.push_back(Event{t_us, std::uint16_t(x), std::uint16_t(y), polarity});
-    if (kind == kSignal) ++st.signal;
-    else if (kind == kShot) ++st.shot;
-    else ++st.hot;
+    ++*counter;
   }
   diff_[i] = rest;
-  hazard_[i] = total_drop > 0 ? hazard - total_drop : hazard;
 }
 
 // Rows hold their events in (y, x, t) order; a stable counting sort on t then gives the

@@ -95,15 +95,18 @@ class PixelModel {
   };
   std::size_t index(int x, int y) const { return std::size_t(y) * width_ + x; }
   struct StepSpan {
-    double t0_s, dt_s;
+    double t0_s, dt_s, t1_s;
     std::int64_t lo_us, hi_us;  // event times are clamped into [lo_us, hi_us]
+    double base_shift_s;        // shot clocks move back by this much (time_base_ moved)
   };
   // lin-log of n sanitised intensities: clamped copies into `clamped`, logs into `log`.
   void lin_log_chunk(const float* in, int n, float* clamped, float* log) const;
   double noise_scale(std::size_t i) const;
+  double draw_wait(std::uint64_t stream, std::size_t pixel, std::uint32_t count,
+                   double rate) const;
   void step_row(int y, const float* in, const StepSpan& span, std::vector<Event>& buf,
                 RowStats& st);
-  void pixel_events(int x, int y, float delta, double hazard_drop, const StepSpan& span,
+  void pixel_events(int x, int y, float delta, float intensity, const StepSpan& span,
                     std::vector<Event>& buf, RowStats& st);
   void merge_rows(std::int64_t t0_us, std::int64_t t1_us, std::vector<Event>& out);
 
@@ -118,11 +121,14 @@ class PixelModel {
   std::vector<float> diff_;     // lp - memorised reference
   std::vector<float> thr_on_, thr_off_;
   std::vector<float> leak_;     // reference drift, log units per second
-  // Noise hazard left before the pixel's next noise event, in units of nominal-threshold
-  // shot-noise rate times seconds. Double: a float near 30 would stop counting down in
-  // microsecond steps.
-  std::vector<double> hazard_;
-  std::vector<std::uint32_t> noise_count_;  // noise draws so far: the RNG counter
+  // Shot noise by thinning: each pixel has a clock of candidate events at its dark rate;
+  // a candidate is kept with probability shot_noise_rate(I) / shot_noise_rate(0). The
+  // clock is float seconds after time_base_, which moves up every 64 s to stay precise.
+  std::vector<float> next_shot_;
+  double time_base_ = 0;
+  std::vector<std::uint32_t> shot_count_;  // candidates drawn so far: the RNG counter
+  std::vector<double> hot_next_;           // per hot pixel (as hot_x_): next event, seconds
+  std::vector<std::uint32_t> hot_count_;
   std::vector<double> last_event_s_;        // for the refractory period
   std::vector<std::uint8_t> hot_;
   // Hot pixels by row: row y owns hot_x_[hot_row_begin_[y] .. hot_row_begin_[y+1]).
