@@ -1,5 +1,8 @@
 #include "layers/blocks.h"
 
+#include <cmath>
+#include <stdexcept>
+
 namespace yelan::layers {
 
 void ConvBn::params(const std::string& conv_key, const std::string& bn_key, ParamList& out) {
@@ -9,6 +12,19 @@ void ConvBn::params(const std::string& conv_key, const std::string& bn_key, Para
 
 Act ConvBn::forward(const Act& x) {
   const Act s = conv.out_shape(x);
+  folded_ = !bn.training && !grad_enabled();
+  if (folded_) {
+    post_ = post_buf_.like(s);
+    const int c = conv.spec().out;
+    if (scale_.size() != std::size_t(c)) scale_ = Floats(c), shift_ = Floats(c);
+    for (int o = 0; o < c; ++o) {
+      scale_[o] = bn.weight.value[o] / std::sqrt(bn.running_var.value[o] + bn.eps);
+      shift_[o] = bn.bias.value[o] - bn.running_mean.value[o] * scale_[o];
+    }
+    conv.forward_folded(x, post_, scale_.data(), shift_.data());
+    if (bn.fused_relu()) activation_forward(Activation::relu, post_, post_);
+    return post_;
+  }
   pre_ = pre_buf_.like(s);
   post_ = post_buf_.like(s);
   conv.forward(x, pre_, !bn.training);  // Winograd when only inference follows
@@ -17,6 +33,7 @@ Act ConvBn::forward(const Act& x) {
 }
 
 void ConvBn::backward(const Act& x, const Act& dy, const Act* dx) {
+  if (folded_) throw std::logic_error("ConvBn: backward after a forward run under NoGrad");
   const Act dpre = dpre_buf_.like(pre_);
   bn.backward(pre_, post_, dy, dpre);
   conv.backward(x, dpre, dx);

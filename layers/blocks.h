@@ -1,5 +1,6 @@
 // The composite blocks of SPEC section 5, with the reference code's state_dict names:
-//   ConvBn         conv (no bias) + BatchNorm2d, optional fused ReLU
+//   ConvBn         conv (no bias) + BatchNorm2d, optional fused ReLU; under NoGrad with BN in
+//                  eval mode, the BN is folded into the conv's weights and bias (one pass)
 //   ResidualBlock  module.{0,1,3,4} = conv-BN-ReLU-conv3x3-BN-ReLU, shortcut.{0,1} = conv-BN,
 //                  summed (no ReLU after the sum); regular / down (stride 2) / up (transposed)
 //   BasicBlock     torchvision's: conv1 bn1 relu conv2 bn2 (+ downsample.{0,1}), ReLU after the sum
@@ -22,7 +23,10 @@ class ConvBn {
   BatchNorm2d bn;
   void params(const std::string& conv_key, const std::string& bn_key, ParamList& out);
   void init(std::uint64_t seed) { conv.init(seed); }
-  void set_training(bool on) { bn.training = on; }
+  void set_training(bool on) {
+    bn.training = on;
+    conv.fold_changed();  // the running statistics may have moved since the last fold
+  }
   void weights_changed() { conv.weights_changed(); }
   Act forward(const Act& x);  // the output lives in this unit until its next forward
   void backward(const Act& x, const Act& dy, const Act* dx);
@@ -31,6 +35,8 @@ class ConvBn {
  private:
   ActBuf pre_buf_, post_buf_, dpre_buf_;
   Act pre_, post_;
+  bool folded_ = false;  // the last forward ran BN folded into the conv (no backward possible)
+  Floats scale_, shift_;
 };
 
 enum class ResidualKind { regular, down, up };

@@ -1,5 +1,6 @@
 #include "layers/conv2d.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -14,6 +15,16 @@ std::vector<std::int64_t> weight_shape(const ConvSpec& s) {
 std::uint64_t& conv_flops() {
   static std::uint64_t count = 0;
   return count;
+}
+
+bool& winograd_allowed() {
+  static bool allowed = true;
+  return allowed;
+}
+
+std::vector<ConvRecord>*& conv_trace() {
+  static std::vector<ConvRecord>* trace = nullptr;
+  return trace;
 }
 
 Conv2d::Conv2d(const ConvSpec& spec) : weight("weight", weight_shape(spec)), spec_(spec) {
@@ -86,22 +97,63 @@ static void check(const Act& a, int c, int h, int w, const char* what) {
                                 std::to_string(h) + "x" + std::to_string(w));
 }
 
-void Conv2d::forward(const Act& x, const Act& y, bool winograd) {
+void Conv2d::run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* b,
+                         bool winograd) {
   const auto s = conv_shape(x);
+  conv_flops() += std::uint64_t(s.flops());
+  if (conv_trace())
+    conv_trace()->push_back({&weight, spec_.k, spec_.stride, spec_.transposed, x.c, x.h, x.w, y.c, y.h, y.w,
+                             std::uint64_t(s.flops()) / std::uint64_t(std::max(1, x.n))});
+  const kernels::ConvKernels& k = kernels::conv_kernels();
+  if (spec_.transposed)
+    kernels::deconv_fwd(k, deconv_shape(x), x.data, w, b, y.data);
+  else if (winograd && wino && winograd_allowed())
+    k.fwd_winograd(s, x.data, wino, b, y.data);
+  else
+    k.fwd(s, x.data, w, b, y.data);
+}
+
+void Conv2d::check_io(const Act& x, const Act& y) const {
   const Act o = out_shape(x);
   check(x, spec_.in, x.h, x.w, "input");
   check(y, o.c, o.h, o.w, "output");
-  if (!s.valid()) throw std::invalid_argument("conv: input " + std::to_string(x.h) + "x" + std::to_string(x.w) + " too small");
-  pack(s);
-  conv_flops() += std::uint64_t(s.flops());
-  const kernels::ConvKernels& k = kernels::conv_kernels();
-  const float* b = bias ? bias16_.data() : nullptr;
-  if (spec_.transposed)
-    kernels::deconv_fwd(k, deconv_shape(x), x.data, bwd_.data(), b, y.data);
-  else if (winograd && wino_.size())
-    k.fwd_winograd(s, x.data, wino_.data(), b, y.data);
-  else
-    k.fwd(s, x.data, fwd_.data(), b, y.data);
+  if (!conv_shape(x).valid())
+    throw std::invalid_argument("conv: input " + std::to_string(x.h) + "x" + std::to_string(x.w) + " too small");
+}
+
+void Conv2d::forward(const Act& x, const Act& y, bool winograd) {
+  check_io(x, y);
+  pack(conv_shape(x));
+  run_forward(x, y, spec_.transposed ? bwd_.data() : fwd_.data(), wino_.size() ? wino_.data() : nullptr,
+              bias ? bias16_.data() : nullptr, winograd);
+}
+
+void Conv2d::pack_folded(const kernels::ConvShape& s, const float* scale, const float* shift) {
+  if (folded_) return;
+  // Output channel o is dim 0 of OIHW and dim 1 of a transposed conv's IOHW.
+  Floats w(weight.numel());
+  const std::size_t kk = std::size_t(spec_.k) * spec_.k;
+  for (std::size_t i = 0; i < weight.numel(); ++i) {
+    const std::size_t o = spec_.transposed ? (i / kk) % spec_.out : i / (kk * spec_.in);
+    w[i] = weight.value[i] * scale[o];
+  }
+  fold_w_ = Floats(kernels::conv_weight_floats(s));
+  kernels::pack_conv_weights(s, w.data(), spec_.transposed ? kernels::ConvPack::bwd_data : kernels::ConvPack::fwd,
+                             fold_w_.data());
+  fold_wino_ = Floats();
+  if (kernels::winograd_applicable(s) && !spec_.transposed) {
+    fold_wino_ = Floats(kernels::winograd_weight_floats(s));
+    kernels::pack_winograd_weights(s, w.data(), fold_wino_.data());
+  }
+  fold_bias16_ = Floats(std::size_t((spec_.out + 15) / 16) * 16);
+  for (int o = 0; o < spec_.out; ++o) fold_bias16_[o] = shift[o] + (bias ? scale[o] * bias->value[o] : 0.f);
+  folded_ = true;
+}
+
+void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd) {
+  check_io(x, y);
+  pack_folded(conv_shape(x), scale, shift);
+  run_forward(x, y, fold_w_.data(), fold_wino_.size() ? fold_wino_.data() : nullptr, fold_bias16_.data(), winograd);
 }
 
 void Conv2d::backward(const Act& x, const Act& dy, const Act* dx) {

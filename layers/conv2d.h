@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "kernels/conv.h"
 #include "layers/param.h"
@@ -21,6 +22,22 @@ struct ConvSpec {
 // what `yelan model summary` reports. Not thread-safe; a diagnostic.
 std::uint64_t& conv_flops();
 
+// Winograd F(4,3) for 3x3/1 forwards where a caller asks for it (inference). Off: the direct
+// convolution everywhere, a few ulps closer to a reference. Process-wide.
+bool& winograd_allowed();
+
+// One Conv2d forward as `yelan model summary` lists it: which layer (its weight, whose key
+// the caller's ParamList knows), the shapes in and out, and the multiply-add FLOPs.
+struct ConvRecord {
+  const Param* weight;
+  int k, stride;
+  bool transposed;
+  int in_c, in_h, in_w, out_c, out_h, out_w;
+  std::uint64_t flops;
+};
+// When set, every Conv2d forward appends its record here. Not thread-safe; a diagnostic.
+std::vector<ConvRecord>*& conv_trace();
+
 class Conv2d {
  public:
   explicit Conv2d(const ConvSpec& spec);
@@ -30,23 +47,33 @@ class Conv2d {
 
   void params(const std::string& prefix, ParamList& out);
   void init(std::uint64_t seed);  // PyTorch's default initialisation
-  void weights_changed() { packed_ = false; }
+  void weights_changed() { packed_ = folded_ = false; }
   const ConvSpec& spec() const { return spec_; }
 
   // Output geometry for an input (data left null).
   Act out_shape(const Act& x) const;
   // y must have out_shape(x)'s size. Winograd only where applicable (3x3/1) and asked for.
   void forward(const Act& x, const Act& y, bool winograd = false);
+  // Inference through a per-output-channel affine folded into the weights and bias (an
+  // eval-mode BatchNorm after this conv): y = scale * conv(x) + shift in one pass. The folded
+  // weights are packed on the first call after weights_changed() or fold_changed().
+  void forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd = true);
+  void fold_changed() { folded_ = false; }
   // Adds dL/dweight (and dL/dbias) to the gradients; writes dx when dx is non-null.
   void backward(const Act& x, const Act& dy, const Act* dx);
 
  private:
   ConvSpec spec_;
   bool packed_ = false;
+  bool folded_ = false;
   Floats fwd_, bwd_, wino_, bias16_, dw_packed_, db16_, dw_plain_;
+  Floats fold_w_, fold_wino_, fold_bias16_;
   kernels::ConvShape conv_shape(const Act& x) const;   // the kernel's conv (for a deconv: its adjoint)
   kernels::DeconvShape deconv_shape(const Act& x) const;
   void pack(const kernels::ConvShape& s);
+  void check_io(const Act& x, const Act& y) const;
+  void pack_folded(const kernels::ConvShape& s, const float* scale, const float* shift);
+  void run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* bias, bool winograd);
 };
 
 }  // namespace yelan::layers

@@ -50,4 +50,11 @@ void init_uniform_fan_in(Param& p, std::int64_t fan_in, std::uint64_t seed) {
   for (std::size_t i = 0; i < p.numel(); ++i) p.value[i] = float(u(rng));
 }
 
+namespace {
+thread_local bool g_grad_enabled = true;
+}
+bool grad_enabled() { return g_grad_enabled; }
+NoGrad::NoGrad() : saved_(g_grad_enabled) { g_grad_enabled = false; }
+NoGrad::~NoGrad() { g_grad_enabled = saved_; }
+
 }  // namespace yelan::layers

@@ -15,6 +15,21 @@ std::size_t floats_live_bytes();
 std::size_t floats_peak_bytes();
 void reset_floats_peak();
 
+// Like torch.no_grad(): inside a NoGrad scope no backward follows a forward, so layers may
+// take inference-only shortcuts (an eval-mode BatchNorm folded into the conv before it, no
+// buffers kept for the backward). Per thread.
+bool grad_enabled();
+class NoGrad {
+ public:
+  NoGrad();
+  ~NoGrad();
+  NoGrad(const NoGrad&) = delete;
+  NoGrad& operator=(const NoGrad&) = delete;
+
+ private:
+  bool saved_;
+};
+
 // A 64-byte aligned float array (layers may not depend on engine/, so not a Tensor).
 class Floats {
  public:

@@ -1,5 +1,7 @@
 #include "layers/simple.h"
 
+#include <algorithm>
+
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -154,6 +156,61 @@ void add_forward(const Act& a, const Act& b, const Act& y) {
 void accumulate(const Act& from, const Act& into) {
   same_shape(from, into, "accumulate");
   kernels::eltwise_kernels().axpy(1.f, from.data, into.data, from.floats());
+}
+
+namespace {
+void check_mul(const Act& a, const Act& b, const char* what) {
+  if (b.c == 1 && a.c != 1) {
+    same_shape(a, Act{nullptr, b.n, a.c, b.h, b.w}, what);
+    return;
+  }
+  same_shape(a, b, what);
+}
+}  // namespace
+
+void mul_forward(const Act& a, const Act& b, const Act& y) {
+  check_mul(a, b, "mul");
+  same_shape(a, y, "mul");
+  if (b.c == a.c) {
+    for (std::size_t i = 0; i < a.floats(); ++i) y.data[i] = a.data[i] * b.data[i];
+    return;
+  }
+  const std::size_t px = a.pixels();
+  for (int n = 0; n < a.n; ++n)
+    for (int cb = 0; cb < a.cb(); ++cb) {
+      const float* g = b.data + std::size_t(n) * px * 16;  // lane 0 of b's only block
+      const std::size_t o = (std::size_t(n) * a.cb() + cb) * px * 16;
+      for (std::size_t p = 0; p < px; ++p)
+        for (int l = 0; l < 16; ++l) y.data[o + p * 16 + l] = a.data[o + p * 16 + l] * g[p * 16];
+    }
+}
+
+void mul_backward(const Act& a, const Act& b, const Act& dy, const Act* da, const Act* db) {
+  check_mul(a, b, "mul backward");
+  same_shape(a, dy, "mul backward");
+  if (b.c == a.c) {
+    for (std::size_t i = 0; i < a.floats(); ++i) {
+      if (da) da->data[i] = dy.data[i] * b.data[i];
+      if (db) db->data[i] = dy.data[i] * a.data[i];
+    }
+    return;
+  }
+  const std::size_t px = a.pixels();
+  if (db) std::fill(db->data, db->data + db->floats(), 0.f);
+  for (int n = 0; n < a.n; ++n)
+    for (int cb = 0; cb < a.cb(); ++cb) {
+      const float* g = b.data + std::size_t(n) * px * 16;
+      const std::size_t o = (std::size_t(n) * a.cb() + cb) * px * 16;
+      for (std::size_t p = 0; p < px; ++p) {
+        float sum = 0.f;
+        for (int l = 0; l < 16; ++l) {
+          const std::size_t i = o + p * 16 + l;
+          if (da) da->data[i] = dy.data[i] * g[p * 16];
+          sum += dy.data[i] * a.data[i];  // padding lanes of a are zero
+        }
+        if (db) db->data[std::size_t(n) * px * 16 + p * 16] += sum;
+      }
+    }
 }
 
 }  // namespace yelan::layers

@@ -54,4 +54,10 @@ void split_channels(const Act& dy, const Act& da, const Act& db);
 void add_forward(const Act& a, const Act& b, const Act& y);
 void accumulate(const Act& from, const Act& into);  // into += from
 
+// y = a * b elementwise; b may instead have one channel, a per-pixel gate broadcast over a's
+// channels (the human mask applied to every TORE channel). Backward: da = dy * b and
+// db = dy * a, summed over channels when b was broadcast; a null da or db is skipped.
+void mul_forward(const Act& a, const Act& b, const Act& y);
+void mul_backward(const Act& a, const Act& b, const Act& dy, const Act* da, const Act* db);
+
 }  // namespace yelan::layers

@@ -144,3 +144,85 @@ TEST_CASE("window ConvLSTM frames are independent across windows and zero-state 
   const Act y2 = cl.forward(second.act, 3);
   for (std::size_t i = 0; i < y2.floats(); ++i) REQUIRE(y2.data[i] == Approx(y_both[y_both.size() / 2 + i]).margin(1e-6));
 }
+
+namespace {
+
+void randomise_bn_stats(ParamList& params, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (auto& p : params) {
+    const std::string& k = p.key;
+    for (std::size_t i = 0; i < p.param->numel(); ++i) {
+      if (k.ends_with("running_mean") || k.ends_with("bias")) p.param->value[i] = u(rng) - 0.5f;
+      if (k.ends_with("running_var")) p.param->value[i] = 0.2f + 2.f * u(rng);
+      if (p.param->shape.size() == 1 && k.ends_with("weight")) p.param->value[i] = 0.5f + u(rng);
+    }
+  }
+}
+
+// Eval-mode output with gradients enabled (BN as its own pass) against the same forward
+// under NoGrad (BN folded into the conv); a backward after the folded forward must refuse.
+template <class Block>
+void check_folded(Block& block, Owned& x, unsigned seed) {
+  ParamList params;
+  block.params("", params);
+  randomise_bn_stats(params, seed);
+  block.weights_changed();
+  block.set_training(false);
+  const Act y = block.forward(x.act);
+  std::vector<float> ref(y.data, y.data + y.floats());
+  Act yf;
+  {
+    NoGrad no_grad;
+    yf = block.forward(x.act);
+  }
+  REQUIRE(yf.floats() == ref.size());
+  double worst = 0, scale = 1e-6;
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    worst = std::max(worst, double(std::fabs(yf.data[i] - ref[i])));
+    scale = std::max(scale, double(std::fabs(ref[i])));
+  }
+  CHECK(worst / scale < 1e-5);
+  Owned dx(x.act);
+  CHECK_THROWS_AS(block.backward(x.act, yf, dx.act), std::logic_error);
+  // New running statistics take effect after weights_changed(), as after a load.
+  for (auto& p : params)
+    if (p.key.ends_with("running_var")) p.param->value[0] *= 4.f;
+  block.weights_changed();
+  const Act y2 = block.forward(x.act);
+  ref.assign(y2.data, y2.data + y2.floats());
+  NoGrad no_grad;
+  const Act yf2 = block.forward(x.act);
+  double worst2 = 0;
+  for (std::size_t i = 0; i < ref.size(); ++i) worst2 = std::max(worst2, double(std::fabs(yf2.data[i] - ref[i])));
+  CHECK(worst2 / scale < 1e-5);
+}
+
+}  // namespace
+
+TEST_CASE("BN folded into the conv under NoGrad matches the eval-mode forward", "[layers][blocks]") {
+  {
+    ResidualBlock b(5, 7, ResidualKind::regular);
+    b.init(11);
+    Owned x(2, 5, 17, 9, 12);  // 3x3/1: Winograd with folded weights
+    check_folded(b, x, 1);
+  }
+  {
+    ResidualBlock b(6, 13, ResidualKind::down);
+    b.init(12);
+    Owned x(1, 6, 9, 7, 13);
+    check_folded(b, x, 2);
+  }
+  {
+    ResidualBlock b(9, 5, ResidualKind::up, 0, 1);  // transposed convs: output channel is dim 1
+    b.init(13);
+    Owned x(1, 9, 5, 6, 14);
+    check_folded(b, x, 3);
+  }
+  {
+    BasicBlock b(5, 17, 2);
+    b.init(14);
+    Owned x(3, 5, 33, 44, 15);
+    check_folded(b, x, 4);
+  }
+}

@@ -231,6 +231,28 @@ TEST_CASE("activations, pooling, linear and concatenation: gradients by finite d
   }
 }
 
+TEST_CASE("elementwise mul, same shape and a one-channel gate: gradients by finite differences", "[layers][simple]") {
+  for (auto [c, gc] : {std::pair{13, 13}, std::pair{6, 1}, std::pair{17, 1}, std::pair{1, 1}}) {
+    INFO(c << " channels times " << gc);
+    Owned a(2, c, 7, 3, 21), b(2, gc, 7, 3, 22), y(a.act), w(a.act, 23), da(a.act), db(b.act);
+    auto loss = [&] {
+      mul_forward(a.act, b.act, y.act);
+      return dot(w.act, y.act);
+    };
+    loss();
+    // hand check of one element: channel c-1, pixel (6, 2) of the second sample
+    const std::size_t px = 21, i = ((1 * a.act.cb() + (c - 1) / 16) * px + 6 * 3 + 2) * 16 + (c - 1) % 16;
+    const std::size_t j = gc == 1 ? (1 * px + 6 * 3 + 2) * 16 : i;
+    REQUIRE(y.mem[i] == a.mem[i] * b.mem[j]);
+    for (int l = c % 16; c % 16 && l < 16; ++l) REQUIRE(y.mem[(a.act.cb() - 1) * px * 16 + l] == 0.f);
+    mul_backward(a.act, b.act, w.act, &da.act, &db.act);
+    check_input_fd(loss, a, da.act, 3, 1e-3, 1e-3);
+    check_input_fd(loss, b, db.act, 3, 1e-3, 1e-3);
+  }
+  Owned a(1, 6, 4, 4), b(1, 2, 4, 4), y(a.act);
+  CHECK_THROWS_AS(mul_forward(a.act, b.act, y.act), std::invalid_argument);
+}
+
 #include "engine/adam.h"
 
 TEST_CASE("Adam: PyTorch's update, decay, LR steps, clipping, and exact state restore", "[layers][adam]") {

@@ -76,9 +76,16 @@ TEST_CASE("yelan model summary counts the reference's parameters", "[cli][model]
   CHECK(has(r.out, "\"params_mask\": 31196768"));
   CHECK(has(r.out, "\"flops_per_pose\": "));
   CHECK(has(r.out, "\"module\": \"in_cnn\""));
+  // per layer: the ResNet stem, as the reference names it, with its shapes and FLOPs
+  CHECK(has(r.out, "{\"net\": \"pose\", \"name\": \"in_cnn.0\", \"type\": \"conv7x7/2\", \"in\": [6, 260, 346], "
+                   "\"out\": [64, 130, 173], \"params\": 18816, \"flops\": 846343680"));
+  CHECK(has(r.out, "\"name\": \"up1.up\", \"type\": \"deconv2x2/2\""));
+  CHECK(has(r.out, "\"peak_bytes_inference\": "));
   const Result t = cli({"model", "summary", "--config", "tiny"});
   CHECK(t.code == 0);
   CHECK(has(t.out, "pose net: 246550 parameters"));
+  CHECK(has(t.out, "pose in_cnn.0"));
+  CHECK(has(t.out, "conv7x7/2    6x37x75"));
   CHECK(cli({"model", "summary"}).code == 2);
   CHECK(cli({"model", "frob"}).code == 2);
 }

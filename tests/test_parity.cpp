@@ -11,6 +11,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <map>
+#include <optional>
 
 #include "engine/mask_net.h"
 #include "engine/model_config.h"
@@ -130,7 +131,7 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs", "[
   require_torch();
   const auto dir = std::filesystem::temp_directory_path() / ("yelan-parity-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  double worst_overall = 0;
+  double worst_overall = 0, worst_winograd = 0;
   // paper at window 1: the exact networks of the paper configuration (the window only sets
   // how often the ConvLSTM cell repeats), at a cost PyTorch can afford in a test.
   {
@@ -152,6 +153,14 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs", "[
     MaskNet& mask = nets.mask;
     PoseNet& pose = nets.pose;
     auto x = to_act(read_dataset(cs, "input"));
+    // As trained (eval BN its own pass), and as deployed (NoGrad: BN folded into the convs)
+    // with the direct convolution; then as deployed with Winograd, whose different rounding
+    // the heatmaps' softmax amplifies: reported, and held to a looser bound.
+    for (int mode : {0, 1, 2}) {
+    const bool folded = mode > 0;
+    std::optional<yelan::layers::NoGrad> no_grad;
+    if (folded) no_grad.emplace();
+    yelan::layers::winograd_allowed() = mode != 1;
     mask.forward(x.act);
     pose.forward(x.act, cfg.window);
     std::map<std::string, double> err;
@@ -165,13 +174,19 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs", "[
         err[key] = rel_error(pose.heatmap(t, p), read_dataset(cs, key));
       }
     for (auto& [k, e] : err) {
-      std::printf("parity %-8s %-22s max|ours - torch| / max|torch| = %.3g\n", stem.c_str(), k.c_str(), e);
-      INFO(stem << " " << k << ": max |ours - torch| / max |torch| = " << e);
-      CHECK(e < 1e-4);
-      worst_overall = std::max(worst_overall, e);
+      static const char* mode_name[3] = {"", "folded", "folded+winograd"};
+      std::printf("parity %-8s %-15s %-22s max|ours - torch| / max|torch| = %.3g\n", stem.c_str(),
+                  mode_name[mode], k.c_str(), e);
+      INFO(stem << " " << mode_name[mode] << " " << k << ": max |ours - torch| / max |torch| = " << e);
+      CHECK(e < (mode == 2 ? 3e-4 : 1e-4));
+      if (mode < 2) worst_overall = std::max(worst_overall, e);
+      else worst_winograd = std::max(worst_winograd, e);
+    }
     }
   }
-  WARN("forward parity, worst relative error over every head: " << worst_overall);
+  yelan::layers::winograd_allowed() = true;
+  WARN("forward parity, worst relative error over every head: " << worst_overall
+       << " (inference with BN folded and Winograd: " << worst_winograd << ")");
   std::filesystem::remove_all(dir);
 }
 

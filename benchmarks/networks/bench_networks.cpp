@@ -59,6 +59,7 @@ void bench_config(const ModelConfig& cfg, int frames, int threads, int reps, std
   mask.set_training(false);
   pose.set_training(false);
   auto infer = [&] {
+    layers::NoGrad no_grad;  // inference as deployed: BN folded into the convolutions
     mask.forward(x);
     pose.forward(x, frames);
   };

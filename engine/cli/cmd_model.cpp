@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iomanip>
+#include <map>
 #include <sstream>
 
 #include "camera/io/h5.h"
@@ -68,6 +69,35 @@ void write_dataset(hid_t file, const std::string& name, const std::vector<hsize_
   h5::check(H5Dwrite(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
 }
 
+// One row of the per-layer table: a convolution, with BN/ReLU folded into it as inference
+// runs it, named by its state_dict key.
+struct LayerRow {
+  std::string net, name;
+  layers::ConvRecord rec;
+  std::int64_t params;
+  std::uint64_t act_bytes;  // the output as we hold it (channels padded to blocks of 16)
+};
+
+std::vector<LayerRow> layer_rows(const char* net, const std::vector<layers::ConvRecord>& trace,
+                                 const layers::ParamList& params) {
+  std::map<const layers::Param*, std::string> key_of;
+  std::map<std::string, std::int64_t> numel_of;
+  for (const auto& p : params) {
+    key_of[p.param] = p.key;
+    numel_of[p.key] = std::int64_t(p.param->numel());
+  }
+  std::vector<LayerRow> rows;
+  for (const auto& r : trace) {
+    std::string key = key_of.count(r.weight) ? key_of[r.weight] : "?";
+    const std::string name = key.size() > 7 && key.ends_with(".weight") ? key.substr(0, key.size() - 7) : key;
+    const std::int64_t n = numel_of[key] + (numel_of.count(name + ".bias") ? numel_of[name + ".bias"] : 0);
+    rows.push_back({net, name, r, n, std::uint64_t((r.out_c + 15) / 16) * 16 * r.out_h * r.out_w * 4});
+  }
+  return rows;
+}
+
+std::string shape_str(int c, int h, int w) { return std::to_string(c) + "x" + std::to_string(h) + "x" + std::to_string(w); }
+
 int summary(const Args& a, std::ostream& out) {
   a.expect_positionals(0, 0);
   const auto name = a.value("--config");
@@ -78,23 +108,45 @@ int summary(const Args& a, std::ostream& out) {
   layers::ParamList mp, pp;
   mask.params(mp);
   pose.params(pp);
-  // FLOPs: a forward of one zero frame (a window of 1) through both networks, counting
-  // every convolution; per-frame work does not depend on the window length.
+  // A forward of one zero frame (a window of 1) through both networks, as inference runs it,
+  // tracing every convolution; per-frame work does not depend on the window length.
   layers::Floats input(std::size_t((cfg.channels + 15) / 16) * cfg.height() * cfg.width() * 16);
   const layers::Act x{input.data(), 1, cfg.channels, cfg.height(), cfg.width()};
   mask.set_training(false);
   pose.set_training(false);
-  layers::conv_flops() = 0;
+  layers::NoGrad no_grad;
+  std::vector<layers::ConvRecord> mask_trace, pose_trace;
+  const std::size_t held = layers::floats_live_bytes();
+  layers::reset_floats_peak();
+  layers::conv_trace() = &mask_trace;
   mask.forward(x);
-  const double mask_flops = double(layers::conv_flops());
-  layers::conv_flops() = 0;
+  layers::conv_trace() = &pose_trace;
   pose.forward(x, 1);
-  const double pose_flops = double(layers::conv_flops());
+  layers::conv_trace() = nullptr;
+  const std::size_t peak = layers::floats_peak_bytes() - held;
+  std::vector<LayerRow> rows = layer_rows("mask", mask_trace, mp), pose_rows = layer_rows("pose", pose_trace, pp);
+  rows.insert(rows.end(), pose_rows.begin(), pose_rows.end());
+  double flops[2] = {0, 0};
+  std::uint64_t act[2] = {0, 0};
+  for (const auto& r : rows) {
+    flops[r.net == "pose"] += double(r.rec.flops);
+    act[r.net == "pose"] += r.act_bytes;
+  }
   if (a.flag("--json")) {
     out << "{\"config\": \"" << cfg.name << "\", \"params_mask\": " << count(mp, true) << ", \"params_pose\": "
-        << count(pp, true) << ", \"flops_per_pose\": " << std::llround(pose_flops)
-        << ", \"flops_per_mask\": " << std::llround(mask_flops) << ", \"input\": [" << cfg.window << ", " << cfg.channels
-        << ", " << cfg.height() << ", " << cfg.width() << "], \"layers\": [";
+        << count(pp, true) << ", \"flops_per_pose\": " << std::llround(flops[1])
+        << ", \"flops_per_mask\": " << std::llround(flops[0]) << ", \"activation_bytes_mask\": " << act[0]
+        << ", \"activation_bytes_pose\": " << act[1] << ", \"peak_bytes_inference\": " << peak << ", \"input\": ["
+        << cfg.window << ", " << cfg.channels << ", " << cfg.height() << ", " << cfg.width() << "], \"layers\": [";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const auto& r = rows[i];
+      out << (i ? ", " : "") << "{\"net\": \"" << r.net << "\", \"name\": \"" << r.name << "\", \"type\": \""
+          << (r.rec.transposed ? "deconv" : "conv") << r.rec.k << "x" << r.rec.k << "/" << r.rec.stride
+          << "\", \"in\": [" << r.rec.in_c << ", " << r.rec.in_h << ", " << r.rec.in_w << "], \"out\": [" << r.rec.out_c
+          << ", " << r.rec.out_h << ", " << r.rec.out_w << "], \"params\": " << r.params << ", \"flops\": " << r.rec.flops
+          << ", \"act_bytes\": " << r.act_bytes << "}";
+    }
+    out << "], \"modules\": [";
     bool first = true;
     for (auto [net, params] : {std::pair{"mask", &mp}, std::pair{"pose", &pp}})
       for (auto& [m, n] : by_module(*params)) {
@@ -105,14 +157,28 @@ int summary(const Args& a, std::ostream& out) {
     return kOk;
   }
   out << "config " << cfg.name << ": input " << cfg.window << " x " << cfg.channels << " x " << cfg.height() << " x "
-      << cfg.width() << ", ConvLSTM " << (cfg.bidirectional ? "bidirectional" : "causal") << "\n";
+      << cfg.width() << ", ConvLSTM " << (cfg.bidirectional ? "bidirectional" : "causal") << "\n"
+      << "per frame, as inference runs it (BN and ReLU folded into each convolution):\n";
+  out << std::left << std::setw(5) << "net" << std::setw(42) << "layer" << std::setw(13) << "op" << std::setw(14)
+      << "in" << std::setw(14) << "out" << std::right << std::setw(10) << "params" << std::setw(10) << "MFLOPs"
+      << std::setw(10) << "act KiB" << "\n";
+  for (const auto& r : rows) {
+    std::ostringstream op;
+    op << (r.rec.transposed ? "deconv" : "conv") << r.rec.k << "x" << r.rec.k << "/" << r.rec.stride;
+    out << std::left << std::setw(5) << r.net << std::setw(42) << r.name << std::setw(13) << op.str() << std::setw(14)
+        << shape_str(r.rec.in_c, r.rec.in_h, r.rec.in_w) << std::setw(14) << shape_str(r.rec.out_c, r.rec.out_h, r.rec.out_w)
+        << std::right << std::setw(10) << r.params << std::setw(10) << std::fixed << std::setprecision(1)
+        << double(r.rec.flops) / 1e6 << std::setw(10) << r.act_bytes / 1024 << "\n";
+  }
   for (auto [net, params] : {std::pair{"mask", &mp}, std::pair{"pose", &pp}}) {
     out << net << " net: " << count(*params, true) << " parameters (+" << count(*params, false) - count(*params, true)
         << " BN buffers)\n";
     for (auto& [m, n] : by_module(*params)) out << "  " << std::left << std::setw(20) << m << std::right << n << "\n";
   }
-  out << std::fixed << std::setprecision(2) << "convolution GFLOPs per frame: mask " << mask_flops / 1e9 << ", pose "
-      << pose_flops / 1e9 << "\n";
+  out << std::fixed << std::setprecision(2) << "convolution GFLOPs per frame: mask " << flops[0] / 1e9 << ", pose "
+      << flops[1] / 1e9 << "\n"
+      << "activation MiB per frame (sum of layer outputs): mask " << double(act[0]) / (1 << 20) << ", pose "
+      << double(act[1]) / (1 << 20) << "; peak newly held during the forward (activations, packed weights) " << double(peak) / (1 << 20) << "\n";
   return kOk;
 }
 
@@ -152,8 +218,11 @@ int forward(const Args& a, std::ostream& out) {
   layers::Floats xb(std::size_t(S) * ((cfg.channels + 15) / 16) * cfg.height() * cfg.width() * 16);
   const layers::Act x{xb.data(), S, cfg.channels, cfg.height(), cfg.width()};
   to_blocked(input, x);
-  mask.forward(x);
-  pose.forward(x, cfg.window);
+  {
+    layers::NoGrad no_grad;
+    mask.forward(x);
+    pose.forward(x, cfg.window);
+  }
   const std::string tmp = *outp + ".tmp-" + std::to_string(::getpid());
   try {
     h5::H5Id f = h5::create_file(tmp);
