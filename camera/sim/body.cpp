@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <Eigen/Geometry>
 
@@ -58,8 +60,13 @@ Material dressed(const Material& m, const Vec3& origin, const Vec3& u, const Vec
 
 Dresser::Dresser(const Character& character, std::uint64_t seed)
     : character_(character), seed_(seed) {
-  const double H = std::clamp(character.shape.height_mm, 1000.0, 2300.0);
-  const double g = std::clamp(character.shape.girth, 0.5, 2.0);
+  const double H = character.shape.height_mm, g = character.shape.girth;
+  // Far wider than the cast (1500..1950 mm, 0.8..1.4) so configs can explore, but no
+  // nonsense: a NaN or a 10 m giant would only make garbage geometry downstream.
+  if (!(H >= 500 && H <= 3000) || !(g >= 0.3 && g <= 3))
+    throw std::invalid_argument("character '" + character.name + "': height_mm " +
+                                std::to_string(H) + " (500..3000) or girth " +
+                                std::to_string(g) + " (0.3..3) out of range");
   const bool f = character.shape.female;
   const double limb = g * (f ? 0.92 : 1.0);
   Dims& d = dims_;
@@ -236,6 +243,12 @@ void Dresser::reset_at_rest() {
 }
 
 void Dresser::update(const BodyPose& pose, double t_s) {
+  // A non-finite input would poison the spring state for good, so refuse it.
+  if (!std::isfinite(t_s)) throw std::invalid_argument("Dresser::update: time is not finite");
+  for (int i = 0; i < kBodyPointCount; ++i)
+    if (!pose.p[i].allFinite())
+      throw std::invalid_argument("Dresser::update: body point " + std::to_string(i) +
+                                  " is not finite");
   const double dt = t_s - t_;
   if (!started_ || !(dt >= 0) || dt > kRestartGap) {
     pose_ = pose;

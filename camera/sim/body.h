@@ -27,10 +27,13 @@ class Dresser {
   // Upper bound on what primitives() appends (body 22, hair 4, hat 2, cloth 1).
   static constexpr int kMaxPrimitives = 29;
 
+  // Throws std::invalid_argument when the shape is absurd (height outside 500..3000 mm,
+  // girth outside 0.3..3, or not finite).
   Dresser(const Character& character, std::uint64_t seed);
 
   // Moves the body to `pose` (world mm) and advances the cloth and hair to time t_s
-  // (seconds). The first call sets them at rest. Allocates nothing.
+  // (seconds). The first call sets them at rest. Allocates nothing. Throws
+  // std::invalid_argument (state unchanged) when a point or t_s is not finite.
   void update(const BodyPose& pose, double t_s);
 
   // Appends the current primitives (all human = true) to `out`; reserve kMaxPrimitives to

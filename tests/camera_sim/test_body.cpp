@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <set>
 #include <stdexcept>
 
@@ -417,7 +418,7 @@ TEST_CASE("body springs: random pose jitter at 0.1 ms and 20 ms steps stays boun
       Rng rng(11, std::uint64_t(dt * 1e6));
       std::vector<Primitive> prims;
       prims.reserve(Dresser::kMaxPrimitives);
-      const int steps = int(std::lround(3.0 / dt));
+      const int steps = int(std::lround((dt < 1e-3 ? 0.5 : 5.0) / dt));  // 5000 or 250
       double worst_hem = 0, worst_hair = 0;
       bool finite = true;
       for (int i = 0; i < steps; ++i) {
@@ -440,4 +441,29 @@ TEST_CASE("body springs: random pose jitter at 0.1 ms and 20 ms steps stays boun
       CHECK(worst_hair < 0.35 * H);  // nor the hair its head
     }
   }
+}
+
+TEST_CASE("body dresser: absurd shapes and non-finite poses are refused, state kept") {
+  Character c = character_by_name("dana");
+  c.shape.height_mm = std::nan("");
+  CHECK_THROWS_AS(Dresser(c, 1), std::invalid_argument);
+  c.shape.height_mm = 12000;
+  CHECK_THROWS_WITH(Dresser(c, 1), Catch::Contains("'dana'") && Catch::Contains("height_mm"));
+  c.shape.height_mm = 1550;
+  c.shape.girth = 0;
+  CHECK_THROWS_AS(Dresser(c, 1), std::invalid_argument);
+
+  const Character& ok = character_by_name("dana");
+  const BodyPose rest = standing_pose(ok.shape.height_mm, true);
+  Dresser d(ok, 1);
+  d.update(rest, 0.0);
+  d.update(moved(rest, Eigen::Matrix3d::Identity(), Vec3(50, 0, 0)), 0.01);
+  const Vec3 hem = d.hem_centre();
+  BodyPose bad = rest;
+  bad.p[kKneeL].y() = std::numeric_limits<double>::infinity();
+  CHECK_THROWS_WITH(d.update(bad, 0.02), Catch::Contains("body point 18"));
+  CHECK_THROWS_AS(d.update(rest, std::nan("")), std::invalid_argument);
+  CHECK(same_bytes(d.hem_centre(), hem));
+  d.update(rest, 0.02);
+  CHECK(d.hem_centre().allFinite());
 }
