@@ -3,12 +3,24 @@
 // follow the body through damped springs, so a skirt swings after the hips and flares out
 // in a spin. Every primitive has human = true and a pattern frame that moves with the part
 // it is printed on (torso stripes turn with the torso), so texture edges make events.
+// Stripes vary along a frame's u axis (render.cpp): u runs along the part (hoops around the
+// trunk, limbs, skirt) unless the character has stripes_along.
 //
+// Primitive order (stable, tests rely on it): head, jaw, neck, chest, belly, flank R/L,
+// pelvis, shoulder R/L, upper arm/forearm/hand R then L, thigh/shin/foot R then L (22), then
+// hair cap, 3 hair cones, hat crown and brim, and the cloth's cone shell, each if present.
+//
+// Loose cloth (cone shell from the hips, or from mid-trunk for a loose shirt, to the hem):
+// the hem's centre and radius chase a target that hangs mostly under gravity, flares in a
+// spin (tan(angle) = w^2 r / g for the hips' yaw rate w, at most 1 rad for a skirt or
+// dress, 0.5 for a coat, 0.35 for a shirt) and is pushed open and along by the legs.
 // Springs (stiffness k in 1/s^2, damping ratio z; critically damped is z = 1):
 //   skirt, dress and coat hem centre and hem radius  k =  60, z = 0.80  (settles in ~0.7 s)
 //   loose shirt hem                                   k = 150, z = 0.70
 //   long hair (3 segments)                            k = 120, z = 0.50
-// each scaled by a factor in [0.9, 1.1] drawn from the seed. Integration is semi-implicit
+// each scaled by a factor in [0.9, 1.1] drawn from the seed. Damping acts on the velocity
+// relative to the attachment (capped at 4 m/s), so cloth carried at a steady speed does not
+// trail and a teleported pose still swings over smoothly. Integration is semi-implicit
 // Euler in substeps of at most 1 ms with the spring targets interpolated across the step,
 // so any update interval from 0.1 ms to 20 ms is stable. A step over 0.25 s or backwards
 // in time restarts the cloth at rest.
