@@ -4,6 +4,13 @@
 // the pixel's ON or OFF threshold, at the time inside the step where the (linearly
 // interpolated) signal crosses it. Noise (leak, shot noise, hot pixels) is drawn from the
 // counter-based RNG, so the same seed gives the same events whatever the thread count.
+//
+// Noise model: leak drifts each pixel's reference down at leak_rate_hz thresholds per
+// second (per-pixel log-normal rate, random phase at reset), so it fires ON events through
+// the same crossing logic as real changes. Shot noise and hot pixels are Poisson clocks
+// per pixel, keyed by (seed, pixel, event count): their event times fall anywhere inside a
+// step and their statistics do not depend on the step length. Shot and hot events do not
+// move the reference; every event, noise included, obeys the refractory period.
 #pragma once
 #include <cstddef>
 #include <cstdint>
