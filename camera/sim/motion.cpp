@@ -318,7 +318,8 @@ class BvhMotion final : public Motion {
     const Eigen::Quaterniond* q0 = &rot_[f0 * nj];
     const Eigen::Quaterniond* q1 = &rot_[f1 * nj];
     for (std::size_t j = 0; j < nj; ++j) {
-      lr[j] = a == 0 ? q0[j] : q0[j].slerp(a, q1[j]);
+      // End Sites and CMU's uncaptured finger joints hold still: no slerp needed.
+      lr[j] = a == 0 || q0[j].coeffs() == q1[j].coeffs() ? q0[j] : q0[j].slerp(a, q1[j]);
       lt[j] = rest_trans_[j];
     }
     for (std::size_t k = 0; k < np; ++k)

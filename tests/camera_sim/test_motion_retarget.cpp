@@ -135,12 +135,19 @@ TEST_CASE("motion every CMU clip retargets to an upright, grounded performance")
     const Vec3 lr = p0.p[kHipL] - p0.p[kHipR];
     CHECK(std::abs(lr.y()) < 1e-9);
     CHECK(lr.x() > 0);
-    double min_ankle = 1e9;
-    int upright = 0;
+    const bool walk_or_run = std::string(f).rfind("02_", 0) == 0;
+    double min_ankle = 1e9, face_dot = 0;
+    int upright = 0, samples = 0;
     for (double t = 0; t <= m->duration_s(); t += 0.005) {
       const BodyPose p = m->at(t);
       const double low = std::min(p.p[kAnkleR].z(), p.p[kAnkleL].z());
       min_ankle = std::min(min_ankle, low);
+      // The face (head centre -> nose) looks where the shoulders face, on average.
+      const Vec3 chest_fwd = (p.p[kShoulderL] - p.p[kShoulderR]).cross(Vec3::UnitZ()).normalized();
+      face_dot += (p.p[kNose] - p.p[kHead]).normalized().dot(chest_fwd);
+      ++samples;
+      // Walking and running keep the head level (the dancers tip it far, even past horizontal).
+      if (walk_or_run) CHECK((p.p[kHeadTop] - p.p[kHead]).normalized().z() > 0.9);
       const Vec3 torso = p.p[kNeck] - p.p[kPelvis];
       if (torso.z() > 0.9 * torso.norm()) {
         ++upright;
@@ -151,6 +158,7 @@ TEST_CASE("motion every CMU clip retargets to an upright, grounded performance")
         CHECK(p.p[kPelvis].z() > low + 100);
       }
     }
+    CHECK(face_dot / samples > (walk_or_run ? 0.95 : 0.5));
     CHECK(min_ankle > 30);
     CHECK(min_ankle < 150);
     CHECK(upright > 0.3 * m->duration_s() / 0.005);
