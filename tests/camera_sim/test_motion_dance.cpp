@@ -127,7 +127,7 @@ TEST_CASE("motion dance feet stay on or above the floor, joints bend one way") {
     for (const DanceMove& m : d->moves())
       lifting_moves += m.t1_s < 30 && (m.kind == DanceMoveKind::step_touch || m.kind == DanceMoveKind::kick ||
                                        m.kind == DanceMoveKind::jump || m.kind == DanceMoveKind::spin);
-    for (double t = 0; t <= 30; t += 0.004) {
+    for (double t = 0; t <= 30; t += 0.007) {
       const BodyPose p = d->at(t);
       for (int s = 0; s < 2; ++s) {
         const double ankle = p.p[kAnkleR + s].z();
