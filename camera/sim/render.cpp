@@ -68,7 +68,7 @@ struct Prepared {
   Vec3 morigin, mu, mv;
   double albedo = 0.5, albedo2 = 0.5, period = 60;
   Pattern pattern = Pattern::plain;
-  std::uint32_t seed = 0;
+  std::uint64_t print_key = 0;  // per-cell hashes are mix64(print_key ^ cell)
   // screen pixel range (inclusive) and the nearest camera z any hit can have
   int x0 = 0, x1 = -1, y0 = 0, y1 = -1;
   double zmin = 0;
@@ -223,7 +223,7 @@ inline double stripe_share(double s, double w) {
 // Printed fabric: about 80% of the cells of a period-sized grid hold one disc of the second
 // colour (centre and radius from the print seed). Edges are ramped over the footprint w (in
 // cells) and the pattern fades to its mean once the footprint spans several blobs.
-inline double print_share(double u, double v, double w, std::uint32_t seed) {
+inline double print_share(double u, double v, double w, std::uint64_t key) {
   const double iu = std::floor(u), iv = std::floor(v);
   const double fu = u - iu, fv = v - iv;
   const int nu = fu < 0.5 ? -1 : 1, nv = fv < 0.5 ? -1 : 1;
@@ -232,7 +232,7 @@ inline double print_share(double u, double v, double w, std::uint32_t seed) {
     for (int dj : {0, nv}) {
       const auto ci = static_cast<std::uint32_t>(static_cast<std::int64_t>(iu) + di);
       const auto cj = static_cast<std::uint32_t>(static_cast<std::int64_t>(iv) + dj);
-      const std::uint64_t h = hash64(seed, kPrintStream, (std::uint64_t(ci) << 32) | cj);
+      const std::uint64_t h = mix64(key ^ ((std::uint64_t(ci) << 32) | cj));
       if ((h >> 56) >= 205) continue;
       const double bx = 0.2 + 0.6 * double(h & 0xffff) / 65536.0;
       const double by = 0.2 + 0.6 * double((h >> 16) & 0xffff) / 65536.0;
@@ -280,7 +280,7 @@ inline double shade(const Prepared& p, int part, const Vec3& X, const ShadeConte
         share = a * (1 - b) + b * (1 - a);
         break;
       }
-      case Pattern::print: share = print_share(u, v, std::max(du, dv), p.seed); break;
+      case Pattern::print: share = print_share(u, v, std::max(du, dv), p.print_key); break;
       case Pattern::plain: break;
     }
     alb = p.albedo + (p.albedo2 - p.albedo) * share;
@@ -327,7 +327,8 @@ bool prepare(const Primitive& prim, const CameraModel& cam, const Eigen::Matrix3
   p.human = prim.human;
   const Material& m = prim.material;
   p.albedo = m.albedo, p.albedo2 = m.albedo2, p.period = m.period_mm;
-  p.pattern = m.pattern, p.seed = m.print_seed;
+  p.pattern = m.pattern;
+  p.print_key = mix64(mix64(m.print_seed) ^ kPrintStream);
   p.morigin = R * m.origin + tr, p.mu = R * m.u_axis, p.mv = R * m.v_axis;
   if (!finite(p.morigin) || !finite(p.mu) || !finite(p.mv) || !std::isfinite(p.period))
     p.pattern = Pattern::plain;
@@ -502,6 +503,10 @@ struct Renderer::Impl {
   std::vector<float> s_int, s_depth;
   std::vector<std::int32_t> s_id;
   std::vector<std::uint8_t> s_mask;
+  // 1 where the static layer shows one surface over the pixel's whole 3x3 neighbourhood:
+  // there a sub-pixel ray that misses every moving primitive sees the cached value.
+  std::vector<std::uint8_t> s_flat;
+  double inv_fx = 1, inv_fy = 1;
   // Per-frame centre hits inside tiles the dynamic layer touches.
   // Centre hits of the static layer and the current frame combined: tiles the dynamic layer
   // touched last frame are reset from the static layer before the next frame.
@@ -528,6 +533,7 @@ struct Renderer::Impl {
     W = c.width, H = c.height;
     ntx = (W + kTile - 1) / kTile, nty = (H + kTile - 1) / kTile;
     ctx.fx = c.fx, ctx.fy = c.fy;
+    inv_fx = 1 / c.fx, inv_fy = 1 / c.fy;
     ctx.level = l.level, ctx.ambient = std::clamp(l.ambient, 0.0, 1.0);
     const Vec3 kd = c.M.leftCols<3>() * l.key_dir;
     ctx.light = kd.norm() > 0 ? Vec3(kd.normalized()) : Vec3::Zero();
@@ -536,6 +542,7 @@ struct Renderer::Impl {
     s_depth.assign(n, std::numeric_limits<float>::infinity());
     s_id.assign(n, -1);
     s_mask.assign(n, 0);
+    s_flat.assign(n, 0);
     c_id.assign(n, -1);
     c_t.assign(n, kInf);
     touched.clear();
@@ -545,7 +552,7 @@ struct Renderer::Impl {
   }
 
   Vec3 ray(double x, double y) const {
-    return Vec3((x - cam.cx) / cam.fx, (y - cam.cy) / cam.fy, 1.0);
+    return Vec3((x - cam.cx) * inv_fx, (y - cam.cy) * inv_fy, 1.0);
   }
 
   // Composites `dyn` onto the static layer into out, intensities times `gain`.
@@ -641,14 +648,28 @@ struct Renderer::Impl {
             int id, part, n;
             Vec3 sum;
           } groups[16];
-          int ng = 0;
+          int ng = 0, nbg = 0;
+          const int sid = s_id[i];
+          const bool flat = s_flat[i];
           for (int s = 0; s < ns; ++s) {
             const Vec3 D = ray(x + offs[s][0], y + offs[s][1]);
             const double DD = D.squaredNorm();
             double bt = kInf;
             int bid = -1, bpart = 0;
-            cast(stat, tile, x, y, D, DD, 0, bt, bid, bpart);
-            cast(dyn, tile, x, y, D, DD, S, bt, bid, bpart);
+            if (flat) {
+              cast(dyn, tile, x, y, D, DD, S, bt, bid, bpart);
+              if (bid < 0) {
+                ++nbg;
+                continue;
+              }
+              double ts;
+              int pt;
+              if (sid >= 0 && intersect(stat.prims[sid], D, DD, bt, ts, pt))
+                bt = ts, bid = sid, bpart = pt;
+            } else {
+              cast(stat, tile, x, y, D, DD, 0, bt, bid, bpart);
+              cast(dyn, tile, x, y, D, DD, S, bt, bid, bpart);
+            }
             if (bid < 0) continue;
             int g = 0;
             while (g < ng && (groups[g].id != bid || groups[g].part != bpart)) ++g;
@@ -656,7 +677,7 @@ struct Renderer::Impl {
             groups[g].n += 1;
             groups[g].sum += bt * D;
           }
-          double sum = 0;
+          double sum = nbg * double(s_int[i]);
           for (int g = 0; g < ng; ++g) {
             const Prepared& p = groups[g].id >= S ? dyn.prims[groups[g].id - S] : stat.prims[groups[g].id];
             sum += groups[g].n * shade(p, groups[g].part, groups[g].sum / groups[g].n, ctx);
@@ -688,6 +709,15 @@ void Renderer::set_static(const CameraModel& cam, const std::vector<Primitive>& 
   m.s_depth = std::move(layer.depth_mm);
   m.s_mask = std::move(layer.mask);
   m.s_id = m.c_id;
+  for (int y = 0; y < m.H; ++y)
+    for (int x = 0; x < m.W; ++x) {
+      bool flat = true;
+      const int id = m.s_id[std::size_t(y) * m.W + x];
+      for (int yy = std::max(0, y - 1); yy <= std::min(m.H - 1, y + 1); ++yy)
+        for (int xx = std::max(0, x - 1); xx <= std::min(m.W - 1, x + 1); ++xx)
+          flat = flat && m.s_id[std::size_t(yy) * m.W + xx] == id;
+      m.s_flat[std::size_t(y) * m.W + x] = flat;
+    }
   for (std::size_t i = 0; i < m.c_t.size(); ++i) m.c_t[i] = m.s_depth[i];
   m.touched.clear();
   std::swap(m.stat, m.dyn);
