@@ -16,13 +16,10 @@ namespace {
 using Result = yelan::test::CliResult;
 Result cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
 bool has(const std::string& s, const std::string& w) { return yelan::test::contains(s, w); }
-
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
+using yelan::test::slurp;
+struct TempDir : yelan::test::CliTempDir {
+  TempDir() : CliTempDir("model") {}
+};
 
 std::vector<float> read_all(const std::string& file, const std::string& name, std::vector<hsize_t>& dims) {
   const hid_t f = H5Fopen(file.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -41,13 +38,6 @@ std::vector<float> read_all(const std::string& file, const std::string& name, st
   H5Fclose(f);
   return out;
 }
-
-struct TempDir {
-  std::filesystem::path p = std::filesystem::temp_directory_path() / ("yelan-model-" + std::to_string(::getpid()));
-  TempDir() { std::filesystem::create_directories(p); }
-  ~TempDir() { std::filesystem::remove_all(p); }
-  std::string operator/(const std::string& f) const { return (p / f).string(); }
-};
 
 }  // namespace
 

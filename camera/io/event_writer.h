@@ -30,6 +30,10 @@ std::unique_ptr<EventWriter> open_event_writer(const std::string& path, const St
 std::unique_ptr<EventWriter> open_text_writer(const std::string& path, const StreamInfo& info);
 std::unique_ptr<EventWriter> open_aedat4_writer(const std::string& path, const StreamInfo& info);
 std::unique_ptr<EventWriter> open_yelan_h5_writer(const std::string& path, const StreamInfo& info);
+// The open HDF5 file (an hid_t) behind a writer from open_yelan_h5_writer, so a labelled
+// recording can add its groups (camera, labels, masks) before close(); throws
+// std::invalid_argument for any other writer.
+std::int64_t yelan_h5_file(EventWriter& writer);
 
 // The temporary name beside `path` that writers fill before renaming.
 std::string temp_path_for(const std::string& path);

@@ -230,6 +230,8 @@ class YelanH5Writer final : public EventWriter {
     }
   }
 
+  hid_t file() const { return file_.get(); }
+
   void close() override {
     ms_buf_.push_back(count_);
     flush();
@@ -267,6 +269,12 @@ std::unique_ptr<EventReader> open_hdf5_events(const std::string& path) { return 
 
 std::unique_ptr<EventWriter> open_yelan_h5_writer(const std::string& path, const StreamInfo& info) {
   return std::make_unique<YelanH5Writer>(path, info);
+}
+
+std::int64_t yelan_h5_file(EventWriter& writer) {
+  auto* w = dynamic_cast<YelanH5Writer*>(&writer);
+  if (!w) throw std::invalid_argument("not a yelan HDF5 recording writer");
+  return w->file();
 }
 
 }  // namespace yelan::camera

@@ -10,8 +10,19 @@ const std::vector<Command>& commands() {
        "usage: yelan run --weights W [--camera | FILE] --rate 50 [--out poses.csv|.json|.h5]\n",
        nullptr, "streaming pose estimation (issue 8)"},
       {"sim", "simulate a dancer seen by an event camera, with labels",
-       "usage: yelan sim --preset NAME|--config scene.json --seed N --duration D -o out.yelan.h5\n",
-       nullptr, "the motion-to-event simulator (issue 6)"},
+       "usage: yelan sim --preset NAME|--config scene.json [--seed N] [--duration 2s] -o OUT.yelan.h5\n"
+       "                 [--preview DIR [--preview-every 5]] [--threads T] [--quiet]\n"
+       "       yelan sim --grid train|test|all --out-dir DIR [--duration 2s] [--seed N] [--limit N]\n"
+       "                 [--characters a,b] [--motions m,..] [--views v,..] [--lights l,..] [--backgrounds b,..] [--force]\n"
+       "       yelan sim --list\n"
+       "A character performs a CMU clip or a procedural dance in a scene; a ray caster renders\n"
+       "it at an adaptive rate (>= 1 kHz) and a v2e-style pixel model makes the events. OUT holds\n"
+       "the events, /camera (K, M), /labels (3D joints in the camera frame, 300 Hz), /masks\n"
+       "(50 Hz) and the scene as attributes; the same arguments give the same bytes.\n"
+       "Presets: <character>-<motion>-<view>-<light>-<bg> or <view>-<light>-<bg> (see --list).\n"
+       "--grid writes one recording per grid member (existing files are kept unless --force)\n"
+       "and DIR/manifest.json. --preview writes PNG frames and a contact sheet.\n",
+       cmd_sim, "the motion-to-event simulator (issue 6)"},
       {"train", "train the mask or pose network on CPU",
        "usage: yelan train --stage mask|pose --config model.json --data DIR|--sim PRESET\n",
        nullptr, "the CPU trainer (issue 7)"},

@@ -28,4 +28,7 @@ int cmd_weights(const std::vector<std::string>& args, std::ostream& out, std::os
 int cmd_model(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 int weights_init(const std::vector<std::string>& args, std::ostream& out);
 
+// engine/cli/cmd_sim.cpp: the motion-to-event simulator (camera/sim).
+int cmd_sim(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace yelan::cli

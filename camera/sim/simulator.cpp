@@ -1,0 +1,204 @@
+#include "camera/sim/simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "camera/sim/rng.h"
+
+namespace yelan::camera::sim {
+
+namespace {
+
+// Independent random streams of one recording, all derived from its seed.
+enum Stream : std::uint64_t { kSceneStream = 1, kDresserStream, kPixelStream, kDanceStream };
+
+std::uint64_t sub_seed(std::uint64_t seed, Stream s) { return hash64(seed, 0x51u, s); }
+
+std::unique_ptr<Motion> make_motion(const SimSpec& spec, const BodyShape& shape) {
+  const std::string& m = spec.motion;
+  if (m.rfind("dance", 0) == 0) {
+    // "dance" draws its style from the recording's seed; "dance<N>" fixes it to N.
+    std::uint64_t style = sub_seed(spec.seed, kDanceStream);
+    if (m.size() > 5) {
+      const std::string digits = m.substr(5);
+      if (digits.find_first_not_of("0123456789") != std::string::npos)
+        throw std::invalid_argument("motion '" + m + "': expected 'dance' or 'dance<number>'");
+      style = std::stoull(digits);
+    }
+    DanceParams p = random_dance_params(style);
+    p.static_legs = spec.dance_static_legs;
+    return make_procedural_dance(p, shape, style, spec.duration_s + 1.0);
+  }
+  const std::string dir = spec.mocap_dir.empty() ? default_mocap_dir() : spec.mocap_dir;
+  const std::filesystem::path path = std::filesystem::path(dir) / (m + ".bvh");
+  if (!std::filesystem::exists(path))
+    throw std::invalid_argument("motion '" + m + "': no " + path.string() +
+                                " (a BVH stem in the mocap folder, or 'dance' for a procedural dance)");
+  return load_bvh_motion(path.string(), shape, spec.motion_options);
+}
+
+SceneConfig seeded_scene(const SimSpec& spec) {
+  SceneConfig c = spec.scene;
+  c.seed = sub_seed(spec.seed, kSceneStream);
+  return c;
+}
+
+}  // namespace
+
+std::string default_mocap_dir() {
+  if (const char* env = std::getenv("YELAN_MOCAP_DIR")) return env;
+#ifdef YELAN_SOURCE_DIR
+  const std::filesystem::path beside = std::filesystem::path(YELAN_SOURCE_DIR) / ".." / "shared" / "data" / "mocap";
+  if (std::filesystem::exists(beside)) return beside.lexically_normal().string();
+#endif
+  return "../shared/data/mocap";
+}
+
+Simulator::Simulator(const SimSpec& spec)
+    : spec_(spec),
+      character_(character_by_name(spec.character)),
+      motion_(make_motion(spec, character_.shape)),
+      dresser_(character_, sub_seed(spec.seed, kDresserStream)),
+      scene_(seeded_scene(spec)),
+      pixel_(scene_.camera().width, scene_.camera().height, spec.pixel, sub_seed(spec.seed, kPixelStream)) {
+  if (!(spec.duration_s > 0) || spec.duration_s > 24 * 3600)
+    throw std::invalid_argument("duration must be in (0 s, 24 h], got " + std::to_string(spec.duration_s));
+  if (!(spec.label_hz >= 1 && spec.label_hz <= 10000) || !(spec.mask_hz >= 1 && spec.mask_hz <= 1000))
+    throw std::invalid_argument("label rate must be 1..10000 Hz and mask rate 1..1000 Hz");
+  if (!(spec.min_step_s > 0 && spec.min_step_s <= spec.max_step_s && spec.max_step_s <= 0.1))
+    throw std::invalid_argument("need 0 < min_step <= max_step <= 0.1 s");
+  dt_ = spec.max_step_s;
+}
+
+Simulator::~Simulator() = default;
+
+double Simulator::image_speed(const BodyPose& a, const BodyPose& b, double dt) const {
+  if (!(dt > 0)) return 0;
+  const CameraModel& cam = scene_.camera();
+  double worst = 0;
+  for (int i = 0; i < kBodyPointCount; ++i) {
+    const Vec3 ca = cam.M.leftCols<3>() * a.p[i] + cam.M.col(3), cb = cam.M.leftCols<3>() * b.p[i] + cam.M.col(3);
+    if (ca.z() < 100 || cb.z() < 100) continue;
+    const double du = cam.fx * (ca.x() / ca.z() - cb.x() / cb.z()), dv = cam.fy * (ca.y() / ca.z() - cb.y() / cb.z());
+    worst = std::max(worst, std::hypot(du, dv));
+  }
+  return worst / dt;
+}
+
+void Simulator::sample(double t_s) {
+  prev_pose_ = pose_;
+  pose_ = motion_->at(t_s);
+  const BodyPose& pose = pose_;
+  dresser_.update(pose, t_s);
+  prims_.clear();
+  dresser_.primitives(prims_);
+  scene_.render(t_s, prims_, frame_);
+  ++stats_.samples;
+}
+
+Label Simulator::label_at(double t_s) const {
+  const Joints13 world = dhp19_joints(motion_->at(t_s));
+  const CameraModel& cam = scene_.camera();
+  Label l;
+  l.t_us = std::llround(t_s * 1e6);
+  for (int j = 0; j < kJointCount; ++j) {
+    const Vec3 c = cam.M.leftCols<3>() * world[j] + cam.M.col(3);
+    l.joints_mm[j] = c;
+    bool ok = c.z() > 1.0;
+    if (ok) {
+      const double u = cam.fx * c.x() / c.z() + cam.cx, v = cam.fy * c.y() / c.z() + cam.cy;
+      ok = u >= 0 && u < cam.width && v >= 0 && v < cam.height;
+    }
+    l.valid[j] = ok;
+  }
+  return l;
+}
+
+void Simulator::run_until(double t_end_s, SimSink& sink) {
+  t_end_s = std::min(t_end_s, spec_.duration_s);
+  const double label_dt = 1.0 / spec_.label_hz, mask_dt = 1.0 / spec_.mask_hz;
+  const double lambda = spec_.step_lambda * std::min(spec_.pixel.pos_threshold, spec_.pixel.neg_threshold);
+  if (!started_) {
+    sample(0.0);
+    pixel_.reset(frame_.intensity.data(), 0.0);
+    sink.mask(0, frame_);
+    next_mask_ = 1;
+    ++stats_.masks;
+    started_ = true;
+  }
+  auto emit_labels = [&](double upto) {
+    for (double tl; (tl = next_label_ * label_dt) <= upto + 1e-12; ++next_label_) {
+      sink.label(label_at(tl));
+      ++stats_.labels;
+    }
+  };
+  emit_labels(t_);
+  while (t_ < t_end_s - 1e-12) {
+    // Land exactly on mask ticks, so each mask is a rendered sample.
+    const double t_mask = next_mask_ * mask_dt;
+    double t1 = std::min({t_ + dt_, t_end_s, t_mask});
+    if (t_mask - t1 < spec_.min_step_s * 0.5 && t_mask <= t_end_s) t1 = t_mask;
+    sample(t1);
+    events_.clear();
+    pixel_.step(frame_.intensity.data(), t_, t1, events_);
+    stats_.events += events_.size();
+    if (!events_.empty()) sink.events(events_);
+    emit_labels(t1);
+    if (std::abs(t1 - t_mask) < 1e-12) {
+      sink.mask(std::llround(t_mask * 1e6), frame_);
+      ++next_mask_;
+      ++stats_.masks;
+    }
+    const double step = t1 - t_;
+    step_sum_ += step;
+    stats_.min_step_s = stats_.min_step_s == 0 ? step : std::min(stats_.min_step_s, step);
+    // The next step: edges may move at most step_lambda pixels (so a pixel's log intensity
+    // moves by at most that fraction of the edge's contrast), flicker at most step_lambda
+    // thresholds. Image speed from the body points' projections over this step.
+    const double speed = image_speed(prev_pose_, pose_, step);
+    double want = speed > 1e-6 ? spec_.step_lambda / speed : spec_.max_step_s;
+    if (spec_.scene.flicker) {
+      const Lighting l = lighting(spec_.scene.light, true);
+      const double rate = 2 * 3.141592653589793 * l.flicker_hz * l.flicker_depth;  // peak d(log I)/dt
+      want = std::min(want, lambda / rate);
+    }
+    dt_ = std::clamp(want, spec_.min_step_s, spec_.max_step_s);
+    t_ = t1;
+  }
+  stats_.mean_step_s = stats_.samples > 1 ? step_sum_ / double(stats_.samples - 1) : 0;
+  stats_.pixel = pixel_.stats();
+}
+
+std::string Simulator::description_json() const {
+  const SceneConfig& sc = scene_.config();
+  const nlohmann::ordered_json j = {
+      {"name", spec_.name},
+      {"character", character_.name},
+      {"clothing", clothing_name(character_.clothing)},
+      {"height_mm", character_.shape.height_mm},
+      {"test_only_character", character_.test_only},
+      {"motion", spec_.motion},
+      {"speed", spec_.motion_options.speed},
+      {"mirror", spec_.motion_options.mirror},
+      {"view", view_name(sc.view)},
+      {"yaw_deg", sc.yaw_deg ? *sc.yaw_deg : view_yaw_deg(sc.view)},
+      {"distance_mm", sc.distance_mm},
+      {"lighting", light_name(sc.light)},
+      {"flicker", sc.flicker},
+      {"background", sc.background == SceneConfig::dynamic ? "dynamic" : "static"},
+      {"occluders", sc.occluders},
+      {"seed", spec_.seed},
+      {"duration_s", spec_.duration_s},
+      {"label_hz", spec_.label_hz},
+      {"mask_hz", spec_.mask_hz},
+      {"scene", scene_.description()}};
+  return j.dump();
+}
+
+}  // namespace yelan::camera::sim

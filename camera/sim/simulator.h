@@ -1,0 +1,128 @@
+// The virtual camera: a character performing a motion in a scene, rendered at an adaptive
+// rate (ESIM: the next sample comes sooner when log intensity moved fast in the last one)
+// and turned into events by the pixel model, with exact labels: 3D joints in the camera
+// frame at label_hz, the human mask at mask_hz. Results go to a SimSink: a recording file,
+// the trainer's stream, previews. Deterministic given the seed, whatever the thread count.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "camera/event.h"
+#include "camera/sim/body.h"
+#include "camera/sim/characters.h"
+#include "camera/sim/dance.h"
+#include "camera/sim/motion.h"
+#include "camera/sim/pixel_model.h"
+#include "camera/sim/scene.h"
+
+namespace yelan::camera::sim {
+
+// Everything that decides one simulated recording (a preset or a scene.json gives it).
+struct SimSpec {
+  std::string name;                 // the preset name, or the config file's stem
+  std::string character = "ana";
+  std::string motion = "05_04";     // a BVH stem in mocap_dir, or "dance" / "dance<N>" (procedural)
+  MotionOptions motion_options;
+  bool dance_static_legs = false;   // procedural only: upper body moves, legs stay put
+  SceneConfig scene;
+  PixelParams pixel = pixel_params_davis346();
+  double duration_s = 2;
+  std::uint64_t seed = 1;
+  double label_hz = 300;            // 3D joints
+  double mask_hz = 50;              // human masks (the training frame rate)
+  double max_step_s = 1e-3;         // the slowest sampling: 1 kHz
+  double min_step_s = 5e-5;         // the fastest: 20 kHz
+  double step_lambda = 0.5;         // per step, edges move at most this many pixels and
+                                    // flicker changes log intensity by at most this many thresholds
+  std::string mocap_dir;            // where BVH stems are looked up (default: ../shared/data/mocap)
+};
+
+struct Label {
+  std::int64_t t_us;
+  Joints13 joints_mm;                      // camera frame
+  std::array<std::uint8_t, kJointCount> valid;  // in front of the camera and inside the image
+};
+
+class SimSink {
+ public:
+  virtual ~SimSink() = default;
+  virtual void events(std::span<const Event> ev) {}
+  virtual void label(const Label& l) {}
+  // The rendered sample at a mask tick (intensity, mask after occlusion, depth).
+  virtual void mask(std::int64_t t_us, const RenderedFrame& frame) {}
+};
+
+struct SimStats {
+  std::uint64_t samples = 0, events = 0, labels = 0, masks = 0;
+  double min_step_s = 0, mean_step_s = 0;
+  PixelStats pixel;
+};
+
+class Simulator {
+ public:
+  explicit Simulator(const SimSpec& spec);
+  ~Simulator();
+  const SimSpec& spec() const { return spec_; }
+  const CameraModel& camera() const { return scene_.camera(); }
+  double duration_s() const { return spec_.duration_s; }
+  double time_s() const { return t_; }
+  // Runs from the current time to min(t_end_s, duration), feeding the sink.
+  void run_until(double t_end_s, SimSink& sink);
+  // The scene as JSON (character, clothing, motion, view, lighting, background, seed, ...).
+  std::string description_json() const;
+  const SimStats& stats() const { return stats_; }
+  // Camera-frame labels for a pose (exposed for previews and tests).
+  Label label_at(double t_s) const;
+
+ private:
+  void sample(double t_s);  // pose -> clothes -> render into frame_
+  double image_speed(const BodyPose& a, const BodyPose& b, double dt) const;  // px/s, fastest body point
+  BodyPose pose_{}, prev_pose_{};
+  SimSpec spec_;
+  Character character_;
+  std::unique_ptr<Motion> motion_;
+  Dresser dresser_;
+  Scene scene_;
+  PixelModel pixel_;
+  RenderedFrame frame_;
+  std::vector<Primitive> prims_;
+  std::vector<Event> events_;
+  double t_ = 0, dt_ = 0;
+  std::int64_t next_label_ = 0, next_mask_ = 0;  // tick indices
+  bool started_ = false;
+  SimStats stats_;
+  double step_sum_ = 0;
+};
+
+// The default place of the CMU clips: $YELAN_MOCAP_DIR, else ../shared/data/mocap beside
+// the source tree, else the working directory's ../shared/data/mocap.
+std::string default_mocap_dir();
+
+// A labelled recording (*.yelan.h5: events, camera, labels, masks, scene attributes) as a
+// sink; the file appears, atomically, at close(). Destroyed without close(): no file.
+class RecordingWriter final : public SimSink {
+ public:
+  RecordingWriter(const std::string& path, const Simulator& sim);
+  ~RecordingWriter() override;
+  void events(std::span<const Event> ev) override;
+  void label(const Label& l) override;
+  void mask(std::int64_t t_us, const RenderedFrame& frame) override;
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// Runs `sim` to its end into `sink` in chunks of simulated time, calling `progress` (may be
+// null) after each.
+void run_to_end(Simulator& sim, SimSink& sink, void (*progress)(double t_s, double duration_s, void* ctx) = nullptr,
+                void* ctx = nullptr);
+
+// A whole recording in one call; returns the stats.
+SimStats write_recording(const SimSpec& spec, const std::string& path);
+
+}  // namespace yelan::camera::sim

@@ -1,0 +1,209 @@
+// `yelan sim`: the motion-to-event simulator (camera/sim) from the command line: one
+// recording from a preset or a scene.json, or a whole grid of them with a manifest.
+#include <omp.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <optional>
+#include <sstream>
+
+#include "camera/io/event_writer.h"
+#include "camera/sim/preview.h"
+#include "camera/sim/presets.h"
+#include "camera/sim/rng.h"
+#include "engine/cli/args.h"
+#include "engine/cli/cli.h"
+#include "engine/cli/handlers.h"
+
+namespace yelan::cli {
+namespace {
+
+namespace sim = camera::sim;
+
+// "2s", "500ms", "1.5m", "90" (seconds).
+double parse_duration(const std::string& s) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(s, &used);
+  } catch (const std::exception&) {
+    throw UsageError("--duration '" + s + "': expected a number with an optional unit (ms, s, m)");
+  }
+  const std::string unit = s.substr(used);
+  const double scale = unit.empty() || unit == "s" ? 1 : unit == "ms" ? 1e-3 : unit == "m" || unit == "min" ? 60 : -1;
+  if (scale < 0 || !(v > 0)) throw UsageError("--duration '" + s + "': expected a positive number with ms, s or m");
+  return v * scale;
+}
+
+std::vector<std::string> csv(const std::optional<std::string>& s) {
+  std::vector<std::string> out;
+  if (!s) return out;
+  std::istringstream in(*s);
+  for (std::string p; std::getline(in, p, ',');)
+    if (!p.empty()) out.push_back(p);
+  return out;
+}
+
+// A grid member's seed: stable under filtering and reordering of the grid.
+std::uint64_t member_seed(std::uint64_t seed, const std::string& name) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : name) h = (h ^ c) * 1099511628211ull;
+  return sim::hash64(seed, h, 0) & 0xffffffffffffull;
+}
+
+struct Progress {
+  std::ostream* err;
+  bool tty;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+};
+
+void show_progress(double t, double total, void* ctx) {
+  auto* p = static_cast<Progress*>(ctx);
+  if (!p->tty) return;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - p->start).count();
+  const int width = 30, filled = int(t / total * width + 0.5);
+  *p->err << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(width - filled), ' ') << "] "
+          << std::fixed << std::setprecision(2) << t << " / " << total << " s simulated, "
+          << (wall > 0 ? t / wall : 0) << "x real time" << std::flush;
+}
+
+std::string stats_line(const sim::SimStats& s, double duration, double wall) {
+  std::ostringstream o;
+  o << s.events << " events (" << std::llround(double(s.events) / duration) << " ev/s), " << s.samples << " samples (mean step "
+    << std::fixed << std::setprecision(3) << s.mean_step_s * 1e3 << " ms, min " << s.min_step_s * 1e3 << " ms), "
+    << s.labels << " labels, " << s.masks << " masks; " << std::setprecision(2) << duration / wall
+    << "x real time";
+  return o.str();
+}
+
+int run_one(const sim::SimSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
+  const auto outp = a.value("-o");
+  if (!outp) throw UsageError("sim needs -o OUT.yelan.h5");
+  if (camera::writer_format_for(*outp) != "yelan-h5") throw UsageError("-o " + *outp + ": expected a .yelan.h5 or .h5 path");
+  Progress prog{&err, &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet")};
+  const auto t0 = std::chrono::steady_clock::now();
+  sim::Simulator s(spec);
+  sim::RecordingWriter rec(*outp, s);
+  std::optional<sim::PreviewSink> preview;
+  if (const auto dir = a.value("--preview"))
+    preview.emplace(*dir, s, a.int_value_or("--preview-every", 5, 1, 1000000), &rec);
+  sim::run_to_end(s, preview ? static_cast<sim::SimSink&>(*preview) : rec, show_progress, &prog);
+  rec.close();
+  if (preview) {
+    const auto files = preview->finish();
+    err << files.size() << " pictures in " << *a.value("--preview") << " (contact_sheet.png, frame_<t_us>.png)\n";
+  }
+  const sim::SimStats stats = s.stats();
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (prog.tty) err << "\n";
+  out << *outp << ": " << stats_line(stats, spec.duration_s, wall) << "\n";
+  return kOk;
+}
+
+int run_grid(const std::string& which, const Args& a, std::ostream& out, std::ostream& err) {
+  const auto dir = a.value("--out-dir");
+  if (!dir) throw UsageError("sim --grid needs --out-dir DIR");
+  sim::GridFilter f{csv(a.value("--characters")), csv(a.value("--motions")), csv(a.value("--views")),
+                    csv(a.value("--lights")), csv(a.value("--backgrounds"))};
+  std::vector<std::string> names = sim::grid_presets(which, f);
+  const int limit = a.int_value_or("--limit", int(names.size()), 0, 1 << 30);
+  if (int(names.size()) > limit) names.resize(std::size_t(limit));
+  if (names.empty()) throw UsageError("sim --grid " + which + ": the filters leave no scene");
+  const double duration = parse_duration(a.value_or("--duration", "2s"));
+  const std::uint64_t seed = std::stoull(a.value_or("--seed", "1"));
+  std::filesystem::create_directories(*dir);
+  std::ostringstream manifest;
+  manifest << "{\"format\": \"yelan-sim-manifest\", \"grid\": \"" << which << "\", \"seed\": " << seed
+           << ", \"duration_s\": " << duration << ", \"recordings\": [";
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    sim::SimSpec spec = sim::preset_spec(names[i]);
+    spec.duration_s = duration;
+    spec.seed = member_seed(seed, names[i]);
+    const std::string file = names[i] + ".yelan.h5";
+    const std::string path = (std::filesystem::path(*dir) / file).string();
+    std::string status = "existing";
+    if (!std::filesystem::exists(path) || a.flag("--force")) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const sim::SimStats s = sim::write_recording(spec, path);
+      status = stats_line(s, duration, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double eta = wall / double(i + 1) * double(names.size() - i - 1);
+    err << "[" << (i + 1) << "/" << names.size() << "] " << names[i] << ": " << status << "; ETA " << std::llround(eta)
+        << " s\n";
+    manifest << (i ? ", " : "") << "{\"file\": \"" << file << "\", \"preset\": \"" << names[i] << "\", \"seed\": "
+             << spec.seed << ", \"split\": \"" << (sim::character_by_name(spec.character).test_only ? "test" : "train")
+             << "\"}";
+  }
+  manifest << "]}\n";
+  const std::string mpath = (std::filesystem::path(*dir) / "manifest.json").string();
+  const std::string tmp = camera::temp_path_for(mpath);
+  {
+    std::ofstream m(tmp);
+    m << manifest.str();
+    if (!m) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, mpath);
+  out << names.size() << " recordings in " << *dir << ", manifest " << mpath << "\n";
+  return kOk;
+}
+
+int list(std::ostream& out) {
+  out << "characters (name, height, clothing, split):\n";
+  for (const auto& c : sim::characters())
+    out << "  " << std::left << std::setw(8) << c.name << std::right << std::setw(6) << c.shape.height_mm << " mm  "
+        << std::left << std::setw(12) << sim::clothing_name(c.clothing) << (c.test_only ? "test" : "train") << "\n";
+  out << "motions: train";
+  for (const auto& m : sim::train_motions()) out << " " << m;
+  out << "; test";
+  for (const auto& m : sim::test_motions()) out << " " << m;
+  out << "; procedural: dance, dance<N>\n"
+      << "presets: <character>-<motion>-<view>-<light>-<bg> (e.g. ana-05_04-front-high-static) or\n"
+      << "  <view>-<light>-<bg> (e.g. front-high-static, front-low-dynamic), optionally with -occluded, -flicker;\n"
+      << "  views front back left right; lights high medium low; backgrounds static dynamic\n"
+      << "grid: train " << sim::grid_presets("train").size() << " scenes, test " << sim::grid_presets("test").size()
+      << " scenes\n";
+  return kOk;
+}
+
+}  // namespace
+
+int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  const Args a("sim", argv,
+               {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
+                "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit"},
+               {"--list", "--quiet", "--force"});
+  a.expect_positionals(0, 0);
+  if (a.value("--threads")) omp_set_num_threads(a.int_value_or("--threads", 1, 1, 256));
+  if (a.flag("--list")) return list(out);
+  if (const auto g = a.value("--grid")) return run_grid(*g, a, out, err);
+  const auto preset = a.value("--preset"), config = a.value("--config");
+  if (bool(preset) == bool(config)) throw UsageError("sim needs exactly one of --preset NAME and --config scene.json");
+  sim::SimSpec spec;
+  if (preset) {
+    spec = sim::preset_spec(*preset);
+  } else {
+    std::ifstream in(*config);
+    if (!in) throw UsageError("--config " + *config + ": cannot read");
+    std::stringstream text;
+    text << in.rdbuf();
+    spec = sim::spec_from_json(text.str(), *config);
+    if (spec.name.empty()) spec.name = std::filesystem::path(*config).stem().string();
+  }
+  if (const auto s = a.value("--seed")) {
+    if (s->empty() || s->find_first_not_of("0123456789") != std::string::npos)
+      throw UsageError("--seed '" + *s + "': expected a non-negative integer");
+    spec.seed = std::stoull(*s);
+  }
+  if (const auto d = a.value("--duration")) spec.duration_s = parse_duration(*d);
+  return run_one(spec, a, out, err);
+}
+
+}  // namespace yelan::cli

@@ -1,0 +1,200 @@
+// The simulator as a whole: sampling, labels, masks, events, determinism, recordings.
+#include <catch2/catch.hpp>
+#include <hdf5.h>
+#include <omp.h>
+
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
+
+#include "camera/io/event_reader.h"
+#include "camera/io/h5.h"
+#include "camera/sim/presets.h"
+#include "camera/sim/simulator.h"
+#include "test_util.h"
+
+using namespace yelan::camera;
+using namespace yelan::camera::sim;
+
+namespace {
+
+struct Collect final : SimSink {
+  std::vector<Event> ev;
+  std::vector<Label> labels;
+  std::vector<std::int64_t> mask_t;
+  std::vector<std::size_t> mask_area;
+  void events(std::span<const Event> e) override { ev.insert(ev.end(), e.begin(), e.end()); }
+  void label(const Label& l) override { labels.push_back(l); }
+  void mask(std::int64_t t, const RenderedFrame& f) override {
+    mask_t.push_back(t);
+    std::size_t n = 0;
+    for (auto m : f.mask) n += m != 0;
+    mask_area.push_back(n);
+  }
+};
+
+SimSpec dance_spec(double duration = 0.1) {
+  SimSpec s = preset_spec("ben-dance7-front-high-static");
+  s.duration_s = duration;
+  s.seed = 11;
+  return s;
+}
+
+bool same_events(const std::vector<Event>& a, const std::vector<Event>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (a[i].t != b[i].t || a[i].x != b[i].x || a[i].y != b[i].y || a[i].p != b[i].p) return false;
+  return true;
+}
+
+}  // namespace
+
+TEST_CASE("sim: labels at 300 Hz, masks at 50 Hz, sorted events inside the sensor", "[sim]") {
+  Simulator sim(dance_spec(0.1));
+  Collect c;
+  sim.run_until(1.0, c);  // stops at the duration
+  CHECK(sim.time_s() == Approx(0.1));
+  REQUIRE(c.labels.size() == 31);  // t = 0, 1/300, ..., 0.1
+  CHECK(c.labels[3].t_us == 10000);
+  REQUIRE(c.mask_t.size() == 6);  // 0, 20, ..., 100 ms
+  CHECK(c.mask_t[5] == 100000);
+  REQUIRE(!c.ev.empty());
+  for (std::size_t i = 1; i < c.ev.size(); ++i) REQUIRE(c.ev[i - 1].t <= c.ev[i].t);
+  for (const Event& e : c.ev) {
+    REQUIRE(e.x < 346);
+    REQUIRE(e.y < 260);
+    REQUIRE(e.t > 0);
+    REQUIRE(e.t <= 100000);
+  }
+  // The dancer fills part of the image; every mask shows her.
+  for (auto a : c.mask_area) {
+    CHECK(a > 1000);
+    CHECK(a < 346 * 260 / 2);
+  }
+}
+
+TEST_CASE("sim: joint labels are the camera-frame projection of the body, valid inside the image", "[sim]") {
+  Simulator sim(dance_spec(0.05));
+  const CameraModel& cam = sim.camera();
+  const Label l = sim.label_at(0.02);
+  CHECK(l.t_us == 20000);
+  for (int j = 0; j < kJointCount; ++j) {
+    const Vec3& c = l.joints_mm[j];
+    // A front camera 3.5 m away: every joint in front of it, about that far.
+    CHECK(c.z() > 2000);
+    CHECK(c.z() < 5000);
+    const double u = cam.fx * c.x() / c.z() + cam.cx, v = cam.fy * c.y() / c.z() + cam.cy;
+    CHECK(l.valid[j] == (u >= 0 && u < 346 && v >= 0 && v < 260));
+  }
+  // Head above the feet in the image (y down).
+  CHECK(l.joints_mm[0].y() / l.joints_mm[0].z() < l.joints_mm[11].y() / l.joints_mm[11].z());
+}
+
+TEST_CASE("sim: the same seed gives the same events, whatever the thread count", "[sim]") {
+  auto run = [](int threads, std::uint64_t seed) {
+    omp_set_num_threads(threads);
+    SimSpec s = dance_spec(0.06);
+    s.seed = seed;
+    Simulator sim(s);
+    Collect c;
+    sim.run_until(1.0, c);
+    return c;
+  };
+  const Collect a = run(1, 5), b = run(2, 5), d = run(2, 6);
+  omp_set_num_threads(omp_get_num_procs());
+  CHECK(same_events(a.ev, b.ev));
+  CHECK_FALSE(same_events(a.ev, d.ev));
+  REQUIRE(a.labels.size() == b.labels.size());
+  for (std::size_t i = 0; i < a.labels.size(); ++i)
+    for (int j = 0; j < kJointCount; ++j) REQUIRE(a.labels[i].joints_mm[j] == b.labels[i].joints_mm[j]);
+}
+
+TEST_CASE("sim: a static scene with noise off and a still dancer makes no events", "[sim]") {
+  SimSpec s = preset_spec("ben-dance7-front-high-static");
+  s.dance_static_legs = true;
+  s.pixel = pixel_params_clean();
+  s.duration_s = 0.02;
+  // No motion at all: a BVH would move; a dance at zero speed does not exist, so compare the
+  // clean pixel against the noisy one on the same scene instead: noise adds events.
+  Simulator clean(s);
+  Collect a;
+  clean.run_until(1, a);
+  s.pixel = pixel_params_noisy();
+  Simulator noisy(s);
+  Collect b;
+  noisy.run_until(1, b);
+  CHECK(b.ev.size() > a.ev.size());
+}
+
+TEST_CASE("sim: presets and scene.json", "[sim]") {
+  const SimSpec a = preset_spec("front-low-dynamic");
+  CHECK(a.scene.view == View::front);
+  CHECK(a.scene.light == LightLevel::low);
+  CHECK(a.scene.background == SceneConfig::dynamic);
+  const SimSpec b = preset_spec("kurt-93_03-left-medium-static-occluded-flicker");
+  CHECK(b.character == "kurt");
+  CHECK(b.motion == "93_03");
+  CHECK(b.scene.view == View::left);
+  CHECK(b.scene.occluders);
+  CHECK(b.scene.flicker);
+  CHECK_THROWS_WITH(preset_spec("front-dim-static"), Catch::Contains("unknown lighting 'dim'"));
+  CHECK_THROWS_WITH(preset_spec("zed-05_04-front-high-static"), Catch::Contains("zed"));
+  CHECK_THROWS_WITH(preset_spec("front-high"), Catch::Contains("wrong number of fields"));
+  const SimSpec j = spec_from_json(R"({"preset": "front-high-static", "character": "mia", "distance_mm": 5000,
+                                       "pixel": {"pos_threshold": 0.3}, "seed": 9})", "scene.json");
+  CHECK(j.character == "mia");
+  CHECK(j.scene.distance_mm == 5000);
+  CHECK(j.pixel.pos_threshold == 0.3);
+  CHECK(j.seed == 9);
+  CHECK_THROWS_WITH(spec_from_json(R"({"colour": 1})", "s.json"), Catch::Contains("s.json: unknown key 'colour'"));
+  CHECK_THROWS_WITH(spec_from_json(R"({"view": "top"})", "s.json"), Catch::Contains("view 'top'"));
+  CHECK_THROWS_WITH(spec_from_json("{", "s.json"), Catch::Contains("s.json: not JSON"));
+  // The grid: 11 training characters x 7 motions x 4 x 3 x 2; 3 held-out x 3 motions x 24.
+  CHECK(grid_presets("train").size() == 11 * 7 * 24);
+  CHECK(grid_presets("test").size() == 3 * 3 * 24);
+  const auto f = grid_presets("test", {{"jade"}, {"05_16"}, {"front"}, {}, {"static"}});
+  REQUIRE(f.size() == 3);
+  CHECK(f[0] == "jade-05_16-front-high-static");
+  for (const auto& n : grid_presets("all")) REQUIRE_NOTHROW(preset_spec(n));
+}
+
+TEST_CASE("sim: a recording file holds events, camera, labels, masks and the scene", "[sim]") {
+  const std::string path = "/tmp/yelan-sim-test-" + std::to_string(::getpid()) + ".yelan.h5";
+  const SimStats st = write_recording(dance_spec(0.05), path);
+  REQUIRE(std::filesystem::exists(path));
+  auto reader = open_event_file(path);
+  CHECK(reader->info().width == 346);
+  std::vector<Event> all;
+  while (reader->read(all, 4096) > 0) {
+  }
+  CHECK(all.size() == st.events);
+  h5::H5Id f = h5::open_file(path);
+  CHECK(h5::read_attr_string(f.get(), "format") == "yelan-recording");
+  CHECK(h5::read_attr_string(f.get(), "character") == "ben");
+  CHECK(h5::read_attr_string(f.get(), "scene")->find("\"lighting\":\"high\"") != std::string::npos);
+  auto dims = [&](const char* name) {
+    h5::H5Id ds = h5::check(H5Dopen2(f.get(), name, H5P_DEFAULT), name);
+    return h5::shape(ds.get());
+  };
+  CHECK(dims("labels/joints") == std::vector<hsize_t>{16, 13, 3});
+  CHECK(dims("labels/valid") == std::vector<hsize_t>{16, 13});
+  CHECK(dims("labels/t") == std::vector<hsize_t>{16});
+  CHECK(dims("masks/data") == std::vector<hsize_t>{3, 260, 346});
+  CHECK(dims("camera/K") == std::vector<hsize_t>{3, 3});
+  CHECK(dims("camera/M") == std::vector<hsize_t>{3, 4});
+  std::filesystem::remove(path);
+}
+
+TEST_CASE("sim: CMU clips play from the mocap folder", "[sim]") {
+  const std::string clip = yelan::test::shared_data_or_skip("mocap/05_16.bvh");
+  SimSpec s = preset_spec("jade-05_16-back-medium-dynamic");
+  s.mocap_dir = std::filesystem::path(clip).parent_path().string();
+  s.duration_s = 0.04;
+  Simulator sim(s);
+  Collect c;
+  sim.run_until(1, c);
+  CHECK(c.labels.size() == 13);
+  CHECK(c.mask_t.size() == 3);
+  s.motion = "99_99";
+  CHECK_THROWS_WITH(Simulator(s), Catch::Contains("99_99.bvh"));
+}
