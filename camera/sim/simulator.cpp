@@ -1,6 +1,7 @@
 #include "camera/sim/simulator.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -98,7 +99,9 @@ void Simulator::sample(double t_s) {
   dresser_.update(pose, t_s);
   prims_.clear();
   dresser_.primitives(prims_);
+  const auto t0 = std::chrono::steady_clock::now();
   scene_.render(t_s, prims_, frame_);
+  stats_.render_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ++stats_.samples;
 }
 
@@ -146,7 +149,9 @@ void Simulator::run_until(double t_end_s, SimSink& sink) {
     if (t_mask - t1 < spec_.min_step_s * 0.5 && t_mask <= t_end_s) t1 = t_mask;
     sample(t1);
     events_.clear();
+    const auto p0 = std::chrono::steady_clock::now();
     pixel_.step(frame_.intensity.data(), t_, t1, events_);
+    stats_.pixel_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - p0).count();
     stats_.events += events_.size();
     if (!events_.empty()) sink.events(events_);
     emit_labels(t1);

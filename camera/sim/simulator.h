@@ -58,6 +58,7 @@ class SimSink {
 struct SimStats {
   std::uint64_t samples = 0, events = 0, labels = 0, masks = 0;
   double min_step_s = 0, mean_step_s = 0;
+  double render_wall_s = 0, pixel_wall_s = 0;  // time spent rendering and in the pixel model
   PixelStats pixel;
 };
 

@@ -70,11 +70,12 @@ const std::vector<Command>& commands() {
        "usage: yelan devices\n"
        "Lists attached DAVIS346/DVXplorer cameras: model, USB bus, address, serial.\n",
        cmd_devices, "the libusb driver (issue 5)"},
-      {"bench", "benchmarks: kernels, events, run, early-exit",
+      {"bench", "benchmarks: kernels, events, networks, sim",
        "usage: yelan bench kernels [--quick] [--json] [--isa-list avx2,avx512] [--threads-list 1,2]\n"
        "                          [--reps N] [--only NAME] [--chart FILE.svg] [--from RESULTS.json]\n"
        "       yelan bench events [--json]\n"
        "       yelan bench networks [--configs paper,small,tiny] [--threads-list 1,2] [--window W] [--json]\n"
+       "       yelan bench sim [--duration 2] [--threads-list 1,2] [--character ben] [--motion 05_04] [--json]\n"
        "\n"
        "kernels: every convolution shape of the networks (forward, backward-data,\n"
        "backward-weights) per ISA and thread count, with GFLOP/s and % of the FMA peak\n"
@@ -83,14 +84,19 @@ const std::vector<Command>& commands() {
        "shapes when installed (scripts/setup-debian --reference).\n"
        "--quick: the 3x3/1 shapes, best ISA, 1 thread. --only NAME: shapes whose name\n"
        "contains NAME ('memory', 'convlstm.step' for those groups). --from: re-print the\n"
-       "table (and --chart) of a saved --json run without measuring.\n",
+       "table (and --chart) of a saved --json run without measuring.\n"
+       "sim: simulated seconds per wall second for each lighting x background, the shares\n"
+       "of rendering and the pixel model, and events/s against the real DAVIS346 recording.\n",
        cmd_bench, ""},
       {"model", "network summaries and forward passes",
        "usage: yelan model summary --config NAME|FILE [--json]\n"
        "       yelan model forward --weights W --input IN.h5 --output OUT.h5\n"
        "\n"
-       "summary: parameters of both networks per top-level module, convolution FLOPs per\n"
-       "frame (--json: params_mask, params_pose, flops_per_pose, flops_per_mask, layers).\n"
+       "summary: every convolution of both networks as inference runs it (BN and ReLU folded\n"
+       "in): state_dict name, op, input and output shapes, parameters, FLOPs and activation\n"
+       "memory per frame; parameters per top-level module; totals and the peak memory of one\n"
+       "frame's forward (--json: params_mask, params_pose, flops_per_pose, flops_per_mask,\n"
+       "activation_bytes_*, peak_bytes_inference, layers, modules).\n"
        "forward: both networks in inference mode on dataset `input` (S x C x H x W, S a\n"
        "multiple of the window); writes masks, scores, heatmaps/stage<i>/{xy,zy,xz} and\n"
        "joints_norm, as weights_tools/make_parity_case.py does for PyTorch.\n",
