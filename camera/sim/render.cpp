@@ -618,6 +618,7 @@ struct Renderer::Impl {
           const std::size_t i = row + x;
           const int id = c_id[i];
           bool edge = false, dynamic_near = id >= S;
+          int near_ids[9], n_near = 0;  // distinct surfaces seen by the 3x3 centre rays
           for (int dy = -1; dy <= 1; ++dy) {
             const int yy = y + dy;
             if (yy < 0 || yy >= H) continue;
@@ -627,6 +628,9 @@ struct Renderer::Impl {
               const std::size_t j = std::size_t(yy) * W + xx;
               const int nid = c_id[j];
               if (nid >= S) dynamic_near = true;
+              int k = 0;
+              while (k < n_near && near_ids[k] != nid) ++k;
+              if (k == n_near) near_ids[n_near++] = nid;
               if (nid != id && !(id >= S && nid >= S && seamless(dyn.prims[id - S],
                                                                  dyn.prims[nid - S], c_t[i], c_t[j])))
                 edge = true;
@@ -642,8 +646,11 @@ struct Renderer::Impl {
             if (hp) out.intensity[i] = float(shade(*hp, c_part[i], c_t[i] * ray(x, y), ctx)) * fgain;
             continue;
           }
-          // Cast every sub-pixel ray, then shade each surface once at the mean of its hits,
-          // weighted by its share of the rays: smooth in the edge position, few shadings.
+          // Cast every sub-pixel ray against the surfaces the neighbouring centre rays saw
+          // (a feature thinner than a pixel between them is missed, as by the centre rays),
+          // then shade each surface once at the mean of its hits, weighted by its share of
+          // the rays: smooth in the edge position, few shadings.
+          std::sort(near_ids, near_ids + n_near);
           struct Group {
             int id, part, n;
             Vec3 sum;
@@ -656,19 +663,21 @@ struct Renderer::Impl {
             const double DD = D.squaredNorm();
             double bt = kInf;
             int bid = -1, bpart = 0;
+            double ts;
+            int pt;
+            for (int k = 0; k < n_near; ++k) {
+              const int c = near_ids[k];
+              if (c < 0 || (flat && c < S)) continue;
+              if (intersect(c >= S ? dyn.prims[c - S] : stat.prims[c], D, DD, bt, ts, pt))
+                bt = ts, bid = c, bpart = pt;
+            }
             if (flat) {
-              cast(dyn, tile, x, y, D, DD, S, bt, bid, bpart);
               if (bid < 0) {
                 ++nbg;
                 continue;
               }
-              double ts;
-              int pt;
               if (sid >= 0 && intersect(stat.prims[sid], D, DD, bt, ts, pt))
                 bt = ts, bid = sid, bpart = pt;
-            } else {
-              cast(stat, tile, x, y, D, DD, 0, bt, bid, bpart);
-              cast(dyn, tile, x, y, D, DD, S, bt, bid, bpart);
             }
             if (bid < 0) continue;
             int g = 0;

@@ -62,7 +62,10 @@ class Renderer {
   void set_static(const CameraModel& cam, const std::vector<Primitive>& static_prims,
                   const Lighting& light);
   // The static layer plus `dynamic_prims` at time t_s (flicker applied to everything).
-  // Equivalent to render(cam, static + dynamic, ...) up to hits closer than float precision.
+  // Same mask and depth as render(cam, static + dynamic, ...); intensities match too, except
+  // on the boundary pixels of moving primitives over a flat part of the layer, whose rays
+  // that miss the moving primitives take the layer's pixel average instead of being shaded
+  // one by one (a difference within the texture's variation inside one pixel).
   void render(double t_s, const std::vector<Primitive>& dynamic_prims, RenderedFrame& out);
 
   const CameraModel& camera() const;
