@@ -187,7 +187,7 @@ inline bool intersect(const Prepared& p, const Vec3& D, double DD, double tmax, 
 inline Vec3 normal_at(const Prepared& p, int part, const Vec3& X) {
   switch (p.shape) {
     case Shape::round_cone: {
-      if (part == 0) return (X - p.a).normalized();
+      if (part == 0) return (X - p.a).normalized();  // exact hits lie at ra; means inside
       if (part == 1) return (X - p.b).normalized();
       const Vec3 q = X - p.a;
       Vec3 radial = q - q.dot(p.w) * p.w;
@@ -256,7 +256,7 @@ struct ShadeContext {
 // the mean of several hits on it), seen along the ray through X.
 inline double shade(const Prepared& p, int part, const Vec3& X, const ShadeContext& ctx) {
   const double t = X.z();
-  const Vec3 D = X / t;
+  const Vec3 D = X * (1 / t);
   Vec3 n = normal_at(p, part, X);
   double nD = n.dot(D);
   if (nD > 0) n = -n, nD = -nD;  // two-sided surfaces and the inside of shells face the ray
@@ -264,10 +264,9 @@ inline double shade(const Prepared& p, int part, const Vec3& X, const ShadeConte
   double alb = p.albedo;
   if (p.pattern != Pattern::plain && p.period > 0) {
     // Ray differentials: the pixel's footprint on the tangent plane, in pattern units.
-    const double Dn = D.norm();
-    const double nDc = std::min(nD, -0.02 * Dn);
-    const Vec3 dPdx = (t / ctx.fx) * (Vec3::UnitX() - D * (n.x() / nDc));
-    const Vec3 dPdy = (t / ctx.fy) * (Vec3::UnitY() - D * (n.y() / nDc));
+    const double inv_nD = 1 / std::min(nD, -0.02 * D.norm());
+    const Vec3 dPdx = (t / ctx.fx) * (Vec3::UnitX() - D * (n.x() * inv_nD));
+    const Vec3 dPdy = (t / ctx.fy) * (Vec3::UnitY() - D * (n.y() * inv_nD));
     const Vec3 rel = X - p.morigin;
     const double u = rel.dot(p.mu) / p.period, v = rel.dot(p.mv) / p.period;
     const double du = (std::fabs(p.mu.dot(dPdx)) + std::fabs(p.mu.dot(dPdy))) / p.period;
