@@ -32,7 +32,8 @@ SimWindowStream::SimWindowStream(std::vector<SimSpec> scenes, std::uint64_t seed
 SimWindowStream::~SimWindowStream() = default;
 
 void SimWindowStream::start_scene() {
-  SimSpec spec = scenes_[started_ % scenes_.size()];
+  const std::uint64_t pick = opt_.shuffle ? hash64(seed_, 0x5c3e, started_) : started_;
+  SimSpec spec = scenes_[pick % scenes_.size()];
   spec.seed = hash64(seed_, 0x5717, started_) & 0xffffffffffffull;
   spec.duration_s = opt_.scene_s;
   // Masks exactly at the frame times; the warm-up is a whole number of frames.

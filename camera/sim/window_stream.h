@@ -34,6 +34,7 @@ struct WindowStreamOptions {
   double warmup_s = 0.1;            // simulated before the first frame, so TORE has history
   double scene_s = 2.0;             // each scene runs this long before the next one starts
   ToreOptions tore;
+  bool shuffle = false;             // scene k is a seeded random pick of the list, not k mod n
 };
 
 class SimWindowStream {
@@ -43,6 +44,12 @@ class SimWindowStream {
   // Fills the next window. Windows of one scene follow each other without overlap.
   void next(SimWindow& out);
   std::uint64_t scenes_started() const { return started_; }
+  // The next window comes from scene number k (each scene is seeded by its number alone,
+  // so a resumed trainer gets exactly the data an uninterrupted one would have).
+  void seek_scene(std::uint64_t k) {
+    started_ = k;
+    sim_.reset();
+  }
 
  private:
   struct Sink;

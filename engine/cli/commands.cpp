@@ -24,8 +24,19 @@ const std::vector<Command>& commands() {
        "and DIR/manifest.json. --preview writes PNG frames and a contact sheet.\n",
        cmd_sim, "the motion-to-event simulator (issue 6)"},
       {"train", "train the mask or pose network on CPU",
-       "usage: yelan train --stage mask|pose --config model.json --data DIR|--sim PRESET\n",
-       nullptr, "the CPU trainer (issue 7)"},
+       "usage: yelan train --stage mask|pose --config NAME|FILE --sim PRESETS|train -o OUTDIR\n"
+       "                   [--steps 1000] [--batch 1] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
+       "                   [--occlusion] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
+       "                   [--checkpoint-minutes 10] [--max-minutes M] [--resume] [--threads T]\n"
+       "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
+       "at each frame, downscaled to the config's input. mask: the U-Net learns the current and\n"
+       "N-1 future masks. pose: the pose net learns the normalised 3D joints from masked TORE\n"
+       "(the mask from --mask-weights, frozen, or else the simulator's true mask).\n"
+       "Adam (L2 1e-5), LR halved every 5 (mask) / 10 (pose) epochs, validation on other\n"
+       "recordings each epoch, early stop after --patience 10 epochs. OUTDIR gets log.csv,\n"
+       "checkpoint.h5 + checkpoint.state (atomic, every --checkpoint-minutes and at the end),\n"
+       "best.h5 and final.h5; --resume continues from the checkpoint bit-exactly.\n",
+       cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --data DIR|--sim PRESET [--json OUT]\n",
        nullptr, "evaluation (issue 7)"},

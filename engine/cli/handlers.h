@@ -31,4 +31,7 @@ int weights_init(const std::vector<std::string>& args, std::ostream& out);
 // engine/cli/cmd_sim.cpp: the motion-to-event simulator (camera/sim).
 int cmd_sim(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// engine/cli/cmd_train.cpp: the CPU trainer (engine/train).
+int cmd_train(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace yelan::cli

@@ -1,0 +1,83 @@
+// `yelan train`: the CPU trainer (engine/train) on windows streamed from the simulator.
+#include <unistd.h>
+
+#include <iostream>
+#include <sstream>
+
+#include "camera/sim/presets.h"
+#include "engine/cli/args.h"
+#include "engine/cli/cli.h"
+#include "engine/cli/handlers.h"
+#include "engine/threads.h"
+#include "engine/train/trainer.h"
+
+namespace yelan::cli {
+
+namespace sim = camera::sim;
+
+// "train" / "test" (the grid splits) or comma-separated preset names.
+std::vector<sim::SimSpec> scenes_from(const std::string& text) {
+  std::vector<std::string> names;
+  if (text == "train" || text == "test") {
+    names = sim::grid_presets(text);
+  } else {
+    std::istringstream in(text);
+    for (std::string p; std::getline(in, p, ',');)
+      if (!p.empty()) names.push_back(p);
+  }
+  if (names.empty()) throw UsageError("--sim: no scenes in '" + text + "'");
+  std::vector<sim::SimSpec> out;
+  for (const auto& n : names) out.push_back(sim::preset_spec(n));
+  return out;
+}
+
+int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  const Args a("train", argv,
+               {"--stage", "--config", "--sim", "--val-sim", "--data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
+                "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--threads", "--patience",
+                "--val-windows", "--lr-step-epochs"},
+               {"--occlusion", "--resume", "--quiet"});
+  a.expect_positionals(0, 0);
+  if (a.value("--data")) throw UsageError("--data DIR (recordings on disk) is not supported yet: use --sim PRESETS|train");
+  const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
+  if (!stage || !config || !simv || !o)
+    throw UsageError("train needs --stage mask|pose --config NAME|FILE --sim PRESETS|train -o OUTDIR");
+  train::TrainSpec spec;
+  spec.stage = *stage;
+  if (spec.stage != "mask" && spec.stage != "pose") throw UsageError("--stage must be mask or pose");
+  try {
+    spec.cfg = load_model_config(*config);
+  } catch (const ConfigError& e) {
+    throw UsageError(e.what());
+  }
+  spec.scenes = scenes_from(*simv);
+  if (const auto v = a.value("--val-sim")) spec.val_scenes = scenes_from(*v);
+  spec.out_dir = *o;
+  spec.steps = a.int_value_or("--steps", 1000, 1, 1 << 30);
+  spec.batch = a.int_value_or("--batch", 1, 1, 1024);
+  spec.steps_per_epoch = a.int_value_or("--epoch-steps", 50, 1, 1 << 30);
+  spec.patience = a.int_value_or("--patience", 10, 1, 1 << 20);
+  spec.val_windows = a.int_value_or("--val-windows", 4, 1, 1 << 20);
+  spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
+  spec.adam.lr = std::stod(a.value_or("--lr", "1e-3"));
+  spec.adam.step_size = a.int_value_or("--lr-step-epochs", spec.stage == "mask" ? 5 : 10, 1, 1 << 20);
+  spec.adam.weight_decay = 1e-5;
+  spec.occlusion = a.flag("--occlusion");
+  spec.mask_weights = a.value_or("--mask-weights", "");
+  spec.init_weights = a.value_or("--init", "");
+  spec.checkpoint_minutes = std::stod(a.value_or("--checkpoint-minutes", "10"));
+  spec.max_minutes = std::stod(a.value_or("--max-minutes", "0"));
+  spec.resume = a.flag("--resume");
+  spec.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
+  if (const auto t = a.value("--threads")) {
+    const auto n = parse_thread_count(*t);
+    if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
+    set_threads(*n);
+  }
+  const train::TrainResult r = train::train(spec, err);
+  out << spec.out_dir << ": " << r.steps << " steps, last loss " << r.last_loss << ", best validation " << r.best_val
+      << (r.early_stopped ? " (early stop)" : "") << "\n";
+  return kOk;
+}
+
+}  // namespace yelan::cli

@@ -1,0 +1,140 @@
+#include "engine/train/batch.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace yelan::train {
+
+void OwnedAct::resize(int n, int c, int h, int w) {
+  const layers::Act a{nullptr, n, c, h, w};
+  if (mem.size() != a.floats()) mem = layers::Floats(a.floats());
+  act = a;
+  act.data = mem.data();
+}
+
+BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source)
+    : cfg_(cfg), windows_(windows), source_(source) {
+  const int n = windows * cfg.window, h = cfg.height(), w = cfg.width();
+  b_.input.resize(n, cfg.channels, h, w);
+  if (source == MaskSource::none) b_.labels.resize(n, cfg.n_masks, h, w);
+  b_.target.assign(std::size_t(n) * kJoints * 3, 0.f);
+  b_.valid.assign(std::size_t(n) * kJoints, 0.f);
+  b_.valid_u8.assign(std::size_t(n) * kJoints, 0);
+  b_.truth_mm.resize(std::size_t(n));
+  b_.z_ref.resize(std::size_t(n));
+  b_.frames = n;
+  if (source == MaskSource::net) one_.resize(cfg.window, cfg.channels, h, w);
+}
+
+namespace {
+
+// Mean of each d x d cell of a (C x H x W, channel-major) volume into frame `n` of a blocked act.
+void downscale_into(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
+  const int C = a.c, H = a.h, W = a.w;
+  const float inv = 1.f / float(d * d);
+  for (int c = 0; c < C; ++c) {
+    float* out = a.data + (std::size_t(n) * a.cb() + c / 16) * a.pixels() * 16 + c % 16;
+    const float* in = vol.data() + std::size_t(c) * sensor_h * sensor_w;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        float s = 0;
+        for (int dy = 0; dy < d; ++dy)
+          for (int dx = 0; dx < d; ++dx) s += in[std::size_t(y * d + dy) * sensor_w + x * d + dx];
+        out[(std::size_t(y) * W + x) * 16] = s * inv;
+      }
+  }
+}
+
+// Fraction of human pixels in each d x d cell.
+std::vector<float> mask_cells(const std::vector<std::uint8_t>& m, int sensor_w, int d, int H, int W) {
+  std::vector<float> out(std::size_t(H) * W);
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      int s = 0;
+      for (int dy = 0; dy < d; ++dy)
+        for (int dx = 0; dx < d; ++dx) s += m[std::size_t(y * d + dy) * sensor_w + x * d + dx] != 0;
+      out[std::size_t(y) * W + x] = float(s) / float(d * d);
+    }
+  return out;
+}
+
+void multiply_frame(const layers::Act& a, int n, const std::vector<float>& keep) {
+  for (int cb = 0; cb < a.cb(); ++cb) {
+    float* p = a.data + (std::size_t(n) * a.cb() + cb) * a.pixels() * 16;
+    for (std::size_t i = 0; i < a.pixels(); ++i)
+      for (int l = 0; l < 16; ++l) p[i * 16 + l] *= keep[i];
+  }
+}
+
+}  // namespace
+
+void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ) {
+  if (used_ >= windows_) throw std::logic_error("batch is full");
+  const int S = cfg_.window, d = cfg_.downscale, H = cfg_.height(), W = cfg_.width();
+  const int sw = w.camera.width, sh = w.camera.height;
+  if (sw != cfg_.sensor_width || sh != cfg_.sensor_height)
+    throw std::invalid_argument("simulated sensor is " + std::to_string(sw) + "x" + std::to_string(sh) + ", the model expects " +
+                                std::to_string(cfg_.sensor_width) + "x" + std::to_string(cfg_.sensor_height));
+  const int need = S + (source_ == MaskSource::none ? cfg_.n_masks - 1 : 0);
+  if (int(w.frames.size()) < need) throw std::invalid_argument("window too short for the model");
+  b_.k = {w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy, sw, sh};
+  const layers::Act& in = b_.input.act;
+  for (int t = 0; t < S; ++t) {
+    const int n = used_ * S + t;
+    const auto& f = w.frames[std::size_t(t)];
+    downscale_into(f.tore, sh, sw, d, in, n);
+    if (source_ == MaskSource::net) downscale_into(f.tore, sh, sw, d, one_.act, t);
+    if (source_ == MaskSource::truth) {
+      auto cells = mask_cells(f.mask, sw, d, H, W);
+      for (float& c : cells) c = c > 0 ? 1.f : 0.f;  // any human pixel keeps the cell
+      multiply_frame(in, n, cells);
+    }
+    if (occ && occ->uniform() < 0.5) {
+      const int rects = 1 + occ->below(2);
+      for (int r = 0; r < rects; ++r) {
+        const int rw = int(occ->uniform(10, 80)) / d + 1, rh = int(occ->uniform(10, 80)) / d + 1;
+        const int x0 = occ->below(W), y0 = occ->below(H);
+        std::vector<float> keep(std::size_t(H) * W, 1.f);
+        for (int y = y0; y < std::min(H, y0 + rh); ++y)
+          for (int x = x0; x < std::min(W, x0 + rw); ++x) keep[std::size_t(y) * W + x] = 0.f;
+        multiply_frame(in, n, keep);
+      }
+    }
+    // Targets: the joints normalised with the true head depth.
+    const double zr = f.joints_mm[0].z();
+    b_.z_ref[std::size_t(n)] = zr;
+    for (int j = 0; j < kJoints; ++j) {
+      const std::array<double, 3> p{f.joints_mm[j].x(), f.joints_mm[j].y(), f.joints_mm[j].z()};
+      b_.truth_mm[std::size_t(n)][j] = p;
+      const bool ok = f.valid[j] && p[2] > 1 && zr > 1;
+      const auto q = ok ? normalise_joint(p, b_.k, zr) : std::array<double, 3>{0, 0, 0};
+      for (int c = 0; c < 3; ++c) b_.target[(std::size_t(n) * kJoints + j) * 3 + c] = float(q[c]);
+      b_.valid[std::size_t(n) * kJoints + j] = ok ? 1.f : 0.f;
+      b_.valid_u8[std::size_t(n) * kJoints + j] = ok;
+    }
+    if (source_ == MaskSource::none) {
+      const layers::Act& lab = b_.labels.act;
+      for (int k = 0; k < cfg_.n_masks; ++k) {
+        const auto cells = mask_cells(w.frames[std::size_t(t + k)].mask, sw, d, H, W);
+        float* p = lab.data + (std::size_t(n) * lab.cb() + k / 16) * lab.pixels() * 16 + k % 16;
+        for (std::size_t i = 0; i < lab.pixels(); ++i) p[i * 16] = cells[i] >= 0.5f ? 1.f : 0.f;
+      }
+    }
+  }
+  if (source_ == MaskSource::net) {
+    layers::NoGrad no_grad;
+    mask_net.forward(one_.act);
+    const layers::Act& m = mask_net.masks();
+    const float cut = std::log(0.1f / 0.9f);  // sigmoid(logit) > 0.1
+    for (int t = 0; t < S; ++t) {
+      std::vector<float> keep(std::size_t(H) * W);
+      const float* p = m.data + std::size_t(t) * m.cb() * m.pixels() * 16;  // channel 0: the current mask
+      for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > cut ? 1.f : 0.f;
+      multiply_frame(in, used_ * S + t, keep);
+    }
+  }
+  ++used_;
+}
+
+}  // namespace yelan::train

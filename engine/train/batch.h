@@ -1,0 +1,55 @@
+// Turning simulator windows into network batches: TORE volumes averaged down to the
+// config's input size in the blocked layout, masked (pose stage) by the true mask or a
+// frozen mask net's (binarised at 0.1), optional occlusion rectangles, and the targets:
+// normalised joints with validity (pose) or current + future masks (mask).
+#pragma once
+#include <vector>
+
+#include "camera/sim/rng.h"
+#include "camera/sim/window_stream.h"
+#include "engine/mask_net.h"
+#include "engine/model_config.h"
+#include "engine/train/metrics.h"
+#include "engine/train/pose_norm.h"
+#include "layers/param.h"
+
+namespace yelan::train {
+
+enum class MaskSource { none, truth, net };
+
+struct OwnedAct {
+  layers::Floats mem;
+  layers::Act act;
+  void resize(int n, int c, int h, int w);
+};
+
+struct Batch {
+  OwnedAct input;                    // n = windows x S frames, cfg.channels x H x W
+  OwnedAct labels;                   // mask stage: n x N masks (frame t + k in channel k)
+  std::vector<float> target, valid;  // pose stage: n x 13 x 3 normalised, n x 13
+  std::vector<Pose13> truth_mm;      // camera frame, per frame
+  std::vector<double> z_ref;         // the head's true depth per frame
+  std::vector<std::uint8_t> valid_u8;
+  Intrinsics k{};
+  int frames = 0;
+};
+
+class BatchBuilder {
+ public:
+  BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source);
+  void clear() { used_ = 0; }
+  // Appends one window (its first cfg.window frames are inputs; the mask stage's labels
+  // use the frames after them too). `mask_net` runs (frozen) for MaskSource::net only.
+  void add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occlusion);
+  const Batch& batch() const { return b_; }
+  MaskSource source() const { return source_; }
+
+ private:
+  ModelConfig cfg_;
+  int windows_, used_ = 0;
+  MaskSource source_;
+  Batch b_;
+  OwnedAct one_;  // one window's unmasked input, for the frozen mask net
+};
+
+}  // namespace yelan::train

@@ -1,0 +1,41 @@
+// Pose metrics (SPEC section 7): MPJPE (mm, mean Euclidean distance over valid joints),
+// PCK@150 mm, AUC = mean PCK over 30 thresholds linspace(0, 500, 30) mm; under the paper
+// protocol (as predicted) and root-aligned (both poses shifted so the hip centre is the
+// origin); per joint and per condition. Accumulates frame by frame.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace yelan::train {
+
+inline constexpr int kJoints = 13;
+using Pose13 = std::array<std::array<double, 3>, kJoints>;
+
+struct PoseScores {
+  double mpjpe_mm = 0, pck150 = 0, auc = 0, mpjpe_root_mm = 0, pck150_root = 0, auc_root = 0;
+  std::uint64_t frames = 0, joints = 0;
+  std::array<double, kJoints> mpjpe_per_joint{};
+};
+
+class PoseMetrics {
+ public:
+  // valid: which joints count; a frame with no valid joint is skipped.
+  void add(const Pose13& pred, const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid);
+  PoseScores scores() const;
+  void merge(const PoseMetrics& other);
+
+ private:
+  std::vector<double> dist_, dist_root_;  // one per valid joint
+  std::array<double, kJoints> joint_sum_{};
+  std::array<std::uint64_t, kJoints> joint_n_{};
+  std::uint64_t frames_ = 0;
+};
+
+// The 30 AUC thresholds: 0, 500/29, ..., 500 mm.
+double pck(const std::vector<double>& dist, double threshold_mm);
+double auc(const std::vector<double>& dist);
+
+}  // namespace yelan::train

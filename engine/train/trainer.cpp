@@ -1,0 +1,314 @@
+#include "engine/train/trainer.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "camera/io/event_writer.h"
+#include "camera/sim/rng.h"
+#include "camera/sim/window_stream.h"
+#include "engine/losses.h"
+#include "engine/mask_net.h"
+#include "engine/pose_net.h"
+#include "engine/train/batch.h"
+#include "weights_tools/network_io.h"
+#include "weights_tools/weights_file.h"
+
+namespace yelan::train {
+
+namespace sim = camera::sim;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr char kStateMagic[8] = {'Y', 'E', 'L', 'A', 'N', 'T', 'R', 'N'};
+constexpr std::uint32_t kStateVersion = 1;
+
+struct State {
+  std::int64_t step = 0;
+  std::int64_t adam_t = 0;
+  std::int32_t adam_epochs = 0;
+  double lr = 0, best_val = 1e30;
+  std::int32_t bad_epochs = 0;
+  std::vector<float> moments;
+};
+
+template <class T>
+void put(std::ostream& o, const T& v) {
+  o.write(reinterpret_cast<const char*>(&v), sizeof v);
+}
+template <class T>
+void get(std::istream& in, T& v, const std::string& path) {
+  if (!in.read(reinterpret_cast<char*>(&v), sizeof v)) throw std::runtime_error(path + ": truncated trainer state");
+}
+
+void save_state(const std::string& path, const State& s) {
+  camera::TempFile tmp(path);
+  {
+    std::ofstream o(tmp.path(), std::ios::binary);
+    o.write(kStateMagic, 8);
+    put(o, kStateVersion);
+    put(o, s.step), put(o, s.adam_t), put(o, s.adam_epochs), put(o, s.lr), put(o, s.best_val), put(o, s.bad_epochs);
+    const std::uint64_t n = s.moments.size();
+    put(o, n);
+    o.write(reinterpret_cast<const char*>(s.moments.data()), std::streamsize(n * sizeof(float)));
+    o.flush();
+    if (!o) throw std::runtime_error("cannot write " + tmp.path());
+  }
+  tmp.commit();
+}
+
+State load_state(const std::string& path, std::size_t expect_moments) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot read (nothing to resume?)");
+  char magic[8];
+  if (!in.read(magic, 8) || std::memcmp(magic, kStateMagic, 8) != 0)
+    throw std::runtime_error(path + ": offset 0: not a yelan trainer state");
+  std::uint32_t version;
+  get(in, version, path);
+  if (version != kStateVersion) throw std::runtime_error(path + ": trainer state version " + std::to_string(version));
+  State s;
+  get(in, s.step, path), get(in, s.adam_t, path), get(in, s.adam_epochs, path), get(in, s.lr, path);
+  get(in, s.best_val, path), get(in, s.bad_epochs, path);
+  std::uint64_t n;
+  get(in, n, path);
+  if (n != expect_moments)
+    throw std::runtime_error(path + ": " + std::to_string(n) + " optimizer moments, this model needs " +
+                             std::to_string(expect_moments));
+  s.moments.resize(n);
+  if (!in.read(reinterpret_cast<char*>(s.moments.data()), std::streamsize(n * sizeof(float))))
+    throw std::runtime_error(path + ": truncated trainer state");
+  return s;
+}
+
+// The log up to (and including) `step`: a resumed run rewrites what came after the checkpoint.
+void truncate_log(const std::string& path, std::int64_t step) {
+  std::ifstream in(path);
+  std::string line, kept;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (!header && std::stoll(line.substr(0, line.find(','))) > step) break;
+    kept += line + "\n";
+    header = false;
+  }
+  in.close();
+  camera::TempFile tmp(path);
+  std::ofstream(tmp.path()) << kept;
+  tmp.commit();
+}
+
+weights::Weights snapshot(const ModelConfig& cfg, layers::ParamList& mp, layers::ParamList& pp) {
+  weights::Weights w;
+  w.config_json = cfg.json;
+  w.groups["mask"] = weights::group_of(mp);
+  w.groups["pose"] = weights::group_of(pp);
+  return w;
+}
+
+std::string eta_text(double s) {
+  std::ostringstream o;
+  if (s >= 3600) o << int(s / 3600) << "h" << std::setw(2) << std::setfill('0') << int(s / 60) % 60 << "m";
+  else if (s >= 60) o << int(s / 60) << "m" << std::setw(2) << std::setfill('0') << int(s) % 60 << "s";
+  else o << int(s) << "s";
+  return o.str();
+}
+
+}  // namespace
+
+TrainResult train(const TrainSpec& spec, std::ostream& err) {
+  const ModelConfig& cfg = spec.cfg;
+  const bool pose_stage = spec.stage == "pose";
+  if (!pose_stage && spec.stage != "mask") throw std::invalid_argument("stage must be mask or pose, got '" + spec.stage + "'");
+  if (spec.scenes.empty()) throw std::invalid_argument("no training scenes");
+  if (spec.out_dir.empty()) throw std::invalid_argument("no output folder");
+  if (spec.batch < 1 || spec.steps < 1 || spec.steps_per_epoch < 1)
+    throw std::invalid_argument("batch, steps and steps per epoch must be >= 1");
+  fs::create_directories(spec.out_dir);
+  const std::string ckpt = (fs::path(spec.out_dir) / "checkpoint.h5").string();
+  const std::string state_path = (fs::path(spec.out_dir) / "checkpoint.state").string();
+  const std::string log_path = (fs::path(spec.out_dir) / "log.csv").string();
+
+  MaskNet mask(cfg);
+  PoseNet pose(cfg);
+  layers::ParamList mp, pp;
+  mask.params(mp);
+  pose.params(pp);
+  mask.init(spec.seed * 2 + 1);
+  pose.init(spec.seed * 2 + 2);
+  if (!spec.init_weights.empty()) {
+    const weights::Weights w = weights::load_weights(spec.init_weights);
+    weights::load_group(w, "mask", mp);
+    weights::load_group(w, "pose", pp);
+  }
+  if (pose_stage && !spec.mask_weights.empty()) weights::load_group(weights::load_weights(spec.mask_weights), "mask", mp);
+  mask.weights_changed();
+  pose.weights_changed();
+
+  layers::ParamList& trained = pose_stage ? pp : mp;
+  Adam adam(trained, spec.adam);
+  State st;
+  st.lr = spec.adam.lr;
+  if (spec.resume) {
+    const weights::Weights w = weights::load_weights(ckpt);
+    weights::load_group(w, "mask", mp);
+    weights::load_group(w, "pose", pp);
+    mask.weights_changed();
+    pose.weights_changed();
+    st = load_state(state_path, adam.moments().size());
+    adam.set_state(st.moments, st.adam_t, st.adam_epochs, st.lr);
+    truncate_log(log_path, st.step);
+    err << "resuming " << spec.out_dir << " at step " << st.step << "\n";
+  } else {
+    std::ofstream(log_path) << "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s\n";
+  }
+
+  // One window per simulated scene: scene k feeds window k, whatever happened before.
+  sim::WindowStreamOptions so;
+  so.frame_hz = spec.frame_hz;
+  so.window = cfg.window + (pose_stage ? 0 : cfg.n_masks - 1);  // the mask net learns future masks too
+  so.warmup_s = 0.1;
+  so.scene_s = so.warmup_s + so.window / so.frame_hz + 1e-6;
+  so.shuffle = true;
+  sim::SimWindowStream stream(spec.scenes, spec.seed, so);
+  stream.seek_scene(std::uint64_t(st.step) * std::uint64_t(spec.batch));
+  std::vector<sim::SimSpec> val_scenes = spec.val_scenes.empty() ? spec.scenes : spec.val_scenes;
+  const bool frozen_mask = pose_stage && !spec.mask_weights.empty();
+  BatchBuilder builder(cfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none);
+
+  std::ofstream log(log_path, std::ios::app);
+  auto last_ckpt = std::chrono::steady_clock::now();
+  const auto start = last_ckpt;
+  auto checkpoint = [&] {
+    weights::save_weights(ckpt, snapshot(cfg, mp, pp));
+    st.adam_t = adam.steps();
+    st.adam_epochs = adam.epochs();
+    st.lr = adam.lr();
+    st.moments = adam.moments();
+    save_state(state_path, st);
+    last_ckpt = std::chrono::steady_clock::now();
+  };
+  // Mean loss of the net in eval mode over the validation windows (fixed for the run).
+  auto validate = [&] {
+    sim::SimWindowStream vs(val_scenes, spec.seed ^ 0x7a11da7eull, so);
+    BatchBuilder vb(cfg, 1, builder.source());
+    mask.set_training(false);
+    pose.set_training(false);
+    double sum = 0;
+    for (int i = 0; i < spec.val_windows; ++i) {
+      sim::SimWindow w;
+      vs.next(w);
+      vb.clear();
+      vb.add(w, mask, nullptr);
+      const Batch& b = vb.batch();
+      if (pose_stage) {
+        pose.forward(b.input.act, cfg.window);
+        std::vector<std::array<layers::Act, 3>> dheat;
+        std::vector<layers::Floats> store;
+        sum += hpe_loss(pose, cfg.stages, b.target.data(), b.valid.data(), dheat, store).total;
+      } else {
+        mask.forward(b.input.act);
+        layers::Floats dm(mask.masks().floats());
+        std::vector<float> ds;
+        sum += mask_loss(mask, b.labels.act, {dm.data(), mask.masks().n, mask.masks().c, mask.masks().h, mask.masks().w}, ds).total;
+      }
+    }
+    mask.set_training(!pose_stage);
+    pose.set_training(pose_stage);
+    return sum / spec.val_windows;
+  };
+
+  mask.set_training(!pose_stage);  // the frozen mask net runs with its running statistics
+  pose.set_training(pose_stage);
+  TrainResult result;
+  double loss = 0, grad_norm = 0;
+  while (st.step < spec.steps) {
+    const auto t0 = std::chrono::steady_clock::now();
+    builder.clear();
+    for (int b = 0; b < spec.batch; ++b) {
+      sim::SimWindow w;
+      stream.next(w);
+      sim::Rng occ(spec.seed, 0x0cc1u + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
+      builder.add(w, mask, spec.occlusion ? &occ : nullptr);
+    }
+    const Batch& batch = builder.batch();
+    adam.zero_grad();
+    if (pose_stage) {
+      pose.forward(batch.input.act, cfg.window);
+      std::vector<std::array<layers::Act, 3>> dheat;
+      std::vector<layers::Floats> store;
+      loss = hpe_loss(pose, cfg.stages, batch.target.data(), batch.valid.data(), dheat, store).total;
+      pose.backward(batch.input.act, dheat, nullptr);
+    } else {
+      mask.forward(batch.input.act);
+      layers::Floats dm(mask.masks().floats());
+      const layers::Act dmasks{dm.data(), mask.masks().n, mask.masks().c, mask.masks().h, mask.masks().w};
+      std::vector<float> dscores;
+      loss = mask_loss(mask, batch.labels.act, dmasks, dscores).total;
+      mask.backward(batch.input.act, dmasks, dscores.data());
+    }
+    if (!std::isfinite(loss)) {
+      checkpoint();
+      throw std::runtime_error("loss is " + std::to_string(loss) + " at step " + std::to_string(st.step) +
+                               " (checkpoint of the step before written)");
+    }
+    grad_norm = adam.step();
+    (pose_stage ? static_cast<void>(pose.weights_changed()) : mask.weights_changed());
+    ++st.step;
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double sps = spec.batch * cfg.window / dt;
+    double val = -1;
+    const bool epoch_end = st.step % spec.steps_per_epoch == 0;
+    if (epoch_end) {
+      val = validate();
+      adam.end_epoch();
+      if (val < st.best_val) {
+        st.best_val = val;
+        st.bad_epochs = 0;
+        weights::save_weights((fs::path(spec.out_dir) / "best.h5").string(), snapshot(cfg, mp, pp));
+      } else {
+        ++st.bad_epochs;
+      }
+    }
+    log << st.step << "," << adam.epochs() << "," << std::setprecision(9) << loss << "," << val << "," << adam.lr() << ","
+        << grad_norm << "," << std::setprecision(4) << sps << "," << wall << "\n";
+    log.flush();
+    const double eta = wall / double(st.step - (spec.resume ? 0 : 0) + 1e-9) * double(spec.steps - st.step);
+    if (spec.progress_tty)
+      err << "\rstep " << st.step << "/" << spec.steps << "  epoch " << adam.epochs() << "  loss " << std::fixed
+          << std::setprecision(4) << loss << "  lr " << std::scientific << std::setprecision(1) << adam.lr()
+          << std::defaultfloat << "  " << std::setprecision(3) << sps << " samples/s  ETA " << eta_text(eta) << "   "
+          << std::flush;
+    if (epoch_end)
+      err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
+          << ", validation " << val << " (best " << st.best_val << "), " << sps << " samples/s\n";
+    const bool out_of_time = spec.max_minutes > 0 && wall > spec.max_minutes * 60;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_ckpt).count() > spec.checkpoint_minutes * 60 ||
+        out_of_time)
+      checkpoint();
+    if (epoch_end && st.bad_epochs >= spec.patience) {
+      result.early_stopped = true;
+      err << "early stop: no better validation loss for " << spec.patience << " epochs\n";
+      break;
+    }
+    if (out_of_time) {
+      err << "time limit reached at step " << st.step << " (checkpoint written; --resume continues)\n";
+      break;
+    }
+  }
+  checkpoint();
+  weights::save_weights((fs::path(spec.out_dir) / "final.h5").string(), snapshot(cfg, mp, pp));
+  if (spec.progress_tty) err << "\n";
+  result.steps = st.step;
+  result.last_loss = loss;
+  result.best_val = st.best_val;
+  return result;
+}
+
+}  // namespace yelan::train

@@ -1,0 +1,51 @@
+// The CPU trainer (SPEC section 6): windows of S frames straight from the simulator (no
+// disk), Adam with L2 decay and a step LR schedule, validation on other scenes each epoch
+// with early stopping, occlusion augmentation, a CSV log, and atomic checkpoints every few
+// minutes from which --resume continues bit-exactly.
+//   stage "mask": the U-Net on TORE, labels the current and N-1 future masks.
+//   stage "pose": the pose net on masked TORE (the mask from a frozen mask net, or the
+//   simulator's true mask when none is given), targets the normalised 3D joints.
+#pragma once
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "camera/sim/simulator.h"
+#include "engine/adam.h"
+#include "engine/model_config.h"
+
+namespace yelan::train {
+
+struct TrainSpec {
+  std::string stage = "pose";
+  ModelConfig cfg;
+  std::vector<camera::sim::SimSpec> scenes, val_scenes;
+  std::uint64_t seed = 1;
+  int batch = 1;                    // windows per step
+  std::int64_t steps = 1000;
+  int steps_per_epoch = 50;
+  int val_windows = 4;
+  int patience = 10;                // epochs without a better validation loss
+  AdamOptions adam;
+  double checkpoint_minutes = 10;
+  bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
+  std::string mask_weights;         // pose stage: frozen mask net; empty: the true mask
+  std::string init_weights;         // start from these instead of a random initialisation
+  std::string out_dir;
+  bool resume = false;
+  double frame_hz = 50;
+  bool progress_tty = false;        // a live progress line (else one line per epoch)
+  double max_minutes = 0;           // stop (with a checkpoint) after this long; 0: no limit
+};
+
+struct TrainResult {
+  std::int64_t steps = 0;
+  double last_loss = 0, best_val = 0;
+  bool early_stopped = false;
+};
+
+// Writes out_dir/{log.csv, checkpoint.h5, checkpoint.state, best.h5, final.h5}.
+TrainResult train(const TrainSpec& spec, std::ostream& err);
+
+}  // namespace yelan::train
