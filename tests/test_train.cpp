@@ -96,6 +96,16 @@ TEST_CASE("train: a short run writes its log and checkpoints; --resume continues
   for (const char* f : {"checkpoint.h5", "checkpoint.state", "best.h5", "final.h5"})
     CHECK(std::filesystem::exists(d / (std::string("a/") + f)));
   CHECK(yelan::test::slurp(d / "a/final.h5") == yelan::test::slurp(d / "b/final.h5"));
+  // The trained weights evaluate on held-out test scenes; the JSON has the contract's keys.
+  const auto ev = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--sim", "test", "--scenes", "2", "--seconds",
+                                        "0.04", "--seed", "3", "--json", d / "eval.json"});
+  INFO(ev.err);
+  REQUIRE(ev.code == 0);
+  CHECK(yelan::test::contains(ev.out, "MPJPE"));
+  const std::string js = yelan::test::slurp(d / "eval.json");
+  for (const char* key : {"\"mpjpe_mm\"", "\"pck150\"", "\"auc\"", "\"mpjpe_root_mm\"", "\"frames\": 4", "\"by_condition\"",
+                          "\"lighting\"", "\"mask_iou\""})
+    CHECK(yelan::test::contains(js, key));
   // Nothing to resume from, a bad stage, a missing option: clear errors.
   CHECK(run("none", "2", {"--resume"}).code != 0);
   CHECK(yelan::test::run_cli({"train", "--stage", "legs", "--config", "micro", "--sim", "train", "-o", d / "x"}).code == 2);

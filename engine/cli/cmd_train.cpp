@@ -15,7 +15,7 @@ namespace yelan::cli {
 
 namespace sim = camera::sim;
 
-// "train" / "test" (the grid splits) or comma-separated preset names.
+// "train" / "test" (the grid splits) or comma-separated preset names (also used by eval).
 std::vector<sim::SimSpec> scenes_from(const std::string& text) {
   std::vector<std::string> names;
   if (text == "train" || text == "test") {

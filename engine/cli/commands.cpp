@@ -38,8 +38,15 @@ const std::vector<Command>& commands() {
        "best.h5 and final.h5; --resume continues from the checkpoint bit-exactly.\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
-       "usage: yelan eval --weights W --data DIR|--sim PRESET [--json OUT]\n",
-       nullptr, "evaluation (issue 7)"},
+       "usage: yelan eval --weights W --sim test|PRESETS [--seed N] [--scenes M] [--seconds 1]\n"
+       "                  [--true-mask] [--json OUT] [--threads T]\n"
+       "Both networks as deployed on simulated scenes: --sim test draws M scenes of the test\n"
+       "split (held-out characters and motions; views, lightings and backgrounds in turn)\n"
+       "with seed N, so anyone can check a model on scenes it never saw. Joints are\n"
+       "denormalised with the true head depth (the paper protocol). Prints MPJPE, PCK@150,\n"
+       "AUC (also root-aligned), per joint and per condition, and the mask IoU; --json OUT\n"
+       "writes mpjpe_mm, pck150, auc, mpjpe_root_mm, frames, by_condition, ....\n",
+       cmd_eval, "evaluation (issue 7)"},
       {"convert", "convert an event file between formats",
        "usage: yelan convert IN OUT [--camera N]\n"
        "Reads any event file `yelan info` reads and writes OUT in the format its extension\n"

@@ -34,4 +34,7 @@ int cmd_sim(const std::vector<std::string>& args, std::ostream& out, std::ostrea
 // engine/cli/cmd_train.cpp: the CPU trainer (engine/train).
 int cmd_train(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
+// engine/cli/cmd_eval.cpp: evaluation of a weights file on simulated scenes.
+int cmd_eval(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
+
 }  // namespace yelan::cli

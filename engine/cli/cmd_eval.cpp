@@ -1,0 +1,54 @@
+// `yelan eval`: MPJPE, PCK@150 and AUC of a weights file on simulated test scenes.
+#include <filesystem>
+#include <fstream>
+
+#include "camera/io/event_writer.h"
+#include "camera/sim/presets.h"
+#include "engine/cli/args.h"
+#include "engine/cli/cli.h"
+#include "engine/cli/handlers.h"
+#include "engine/threads.h"
+#include "engine/train/evaluate.h"
+
+namespace yelan::cli {
+
+std::vector<camera::sim::SimSpec> scenes_from(const std::string& text);  // cmd_train.cpp
+
+int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads"},
+               {"--true-mask"});
+  a.expect_positionals(0, 0);
+  if (a.value("--data")) throw UsageError("--data DIR (recordings on disk) is not supported yet: use --sim test|PRESETS");
+  const auto wpath = a.value("--weights"), simv = a.value("--sim");
+  if (!wpath || !simv) throw UsageError("eval needs --weights W --sim test|PRESETS");
+  train::EvalSpec spec;
+  spec.weights = *wpath;
+  spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
+  spec.seconds_per_scene = std::stod(a.value_or("--seconds", "1"));
+  spec.true_mask = a.flag("--true-mask");
+  if (*simv == "test") {
+    for (const auto& n : train::draw_test_scenes(spec.seed, a.int_value_or("--scenes", 24, 1, 1 << 20)))
+      spec.scenes.push_back(camera::sim::preset_spec(n));
+  } else {
+    spec.scenes = scenes_from(*simv);
+  }
+  if (const auto t = a.value("--threads")) {
+    const auto n = parse_thread_count(*t);
+    if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
+    set_threads(*n);
+  }
+  const train::EvalResult r = train::evaluate(spec, err);
+  out << train::eval_table(r);
+  if (const auto j = a.value("--json")) {
+    const std::string tmp = camera::temp_path_for(*j);
+    {
+      std::ofstream f(tmp);
+      f << train::eval_json(r);
+      if (!f) throw std::runtime_error("cannot write " + tmp);
+    }
+    std::filesystem::rename(tmp, *j);
+  }
+  return kOk;
+}
+
+}  // namespace yelan::cli

@@ -1,0 +1,170 @@
+#include "engine/train/evaluate.h"
+
+#include <cmath>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "camera/sim/presets.h"
+#include "camera/sim/rng.h"
+#include "camera/sim/window_stream.h"
+#include "engine/mask_net.h"
+#include "engine/pose_net.h"
+#include "engine/train/batch.h"
+#include "weights_tools/network_io.h"
+#include "weights_tools/weights_file.h"
+
+namespace yelan::train {
+
+namespace sim = camera::sim;
+
+std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count) {
+  const auto all = sim::grid_presets("test");
+  // Group by condition (the last three fields), then take conditions in turn.
+  std::map<std::string, std::vector<std::string>> by_cond;
+  for (const auto& n : all) {
+    std::size_t cut = n.size();
+    for (int i = 0; i < 3; ++i) cut = n.rfind('-', cut - 1);
+    by_cond[n.substr(cut + 1)].push_back(n);
+  }
+  std::vector<const std::vector<std::string>*> conds;
+  for (const auto& [c, v] : by_cond) conds.push_back(&v);
+  std::vector<std::string> out;
+  for (int k = 0; k < count; ++k) {
+    // A stride coprime with the 24 conditions: consecutive scenes differ in view, light and
+    // background, and any 24 in a row cover every condition once.
+    const auto& members = *conds[std::size_t(k) * 7 % conds.size()];
+    out.push_back(members[sim::hash64(seed, 0xe7a1, std::uint64_t(k)) % members.size()]);
+  }
+  return out;
+}
+
+EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
+  const weights::Weights w = weights::load_weights(spec.weights);
+  const ModelConfig cfg = parse_model_config(w.config_json, spec.weights + ": attribute config");
+  MaskNet mask(cfg);
+  PoseNet pose(cfg);
+  layers::ParamList mp, pp;
+  mask.params(mp);
+  pose.params(pp);
+  weights::load_group(w, "mask", mp);
+  weights::load_group(w, "pose", pp);
+  mask.weights_changed();
+  pose.weights_changed();
+  mask.set_training(false);
+  pose.set_training(false);
+  layers::NoGrad no_grad;
+
+  EvalResult res;
+  res.config = cfg.name;
+  PoseMetrics all;
+  std::map<std::string, std::map<std::string, PoseMetrics>> cond;
+  double inter = 0, uni = 0;
+  BatchBuilder builder(cfg, 1, spec.true_mask ? MaskSource::truth : MaskSource::net);
+  for (std::size_t i = 0; i < spec.scenes.size(); ++i) {
+    const sim::SimSpec& s = spec.scenes[i];
+    sim::WindowStreamOptions o;
+    o.window = cfg.window;
+    o.warmup_s = 0.1;
+    const int windows = std::max(1, int(std::floor(spec.seconds_per_scene * o.frame_hz / cfg.window)));
+    o.scene_s = o.warmup_s + windows * cfg.window / o.frame_hz + 1e-6;
+    sim::SimWindowStream stream({s}, sim::hash64(spec.seed, 0xe7a1, i), o);
+    const sim::Character& ch = sim::character_by_name(s.character);
+    const std::map<std::string, std::string> conditions = {
+        {"lighting", sim::light_name(s.scene.light)},
+        {"background", s.scene.background == sim::SceneConfig::dynamic ? "dynamic" : "static"},
+        {"view", sim::view_name(s.scene.view)},
+        {"character", s.character},
+        {"clothing", sim::clothing_name(ch.clothing)},
+        {"occlusion", s.scene.occluders ? "occluded" : "clear"}};
+    for (int k = 0; k < windows; ++k) {
+      sim::SimWindow win;
+      stream.next(win);
+      builder.clear();
+      builder.add(win, mask, nullptr);
+      const Batch& b = builder.batch();
+      pose.forward(b.input.act, cfg.window);
+      const std::vector<float>& jn = pose.joints();
+      for (int t = 0; t < cfg.window; ++t) {
+        Pose13 pred;
+        for (int j = 0; j < kJoints; ++j) {
+          const float* q = &jn[(std::size_t(t) * kJoints + j) * 3];
+          pred[j] = denormalise_joint({q[0], q[1], q[2]}, b.k, b.z_ref[std::size_t(t)]);
+        }
+        std::array<std::uint8_t, kJoints> valid;
+        std::copy_n(&b.valid_u8[std::size_t(t) * kJoints], kJoints, valid.begin());
+        all.add(pred, b.truth_mm[std::size_t(t)], valid);
+        for (const auto& [name, value] : conditions) cond[name][value].add(pred, b.truth_mm[std::size_t(t)], valid);
+      }
+      // Stage 1 IoU: the current mask (binarised at 0.1) against the true mask, at the net's size.
+      if (!spec.true_mask) {
+        const layers::Act& m = mask.masks();
+        const float cut = std::log(0.1f / 0.9f);
+        const int d = cfg.downscale;
+        for (int t = 0; t < cfg.window; ++t) {
+          const auto& truth = win.frames[std::size_t(t)].mask;
+          const float* p = m.data + std::size_t(t) * m.cb() * m.pixels() * 16;
+          for (int y = 0; y < m.h; ++y)
+            for (int x = 0; x < m.w; ++x) {
+              const bool pr = p[(std::size_t(y) * m.w + x) * 16] > cut;
+              const bool tr = truth[std::size_t(y * d + d / 2) * win.camera.width + x * d + d / 2] != 0;
+              inter += pr && tr;
+              uni += pr || tr;
+            }
+        }
+      }
+    }
+    err << "[" << (i + 1) << "/" << spec.scenes.size() << "] " << s.name << ": MPJPE so far " << std::fixed
+        << std::setprecision(1) << all.scores().mpjpe_mm << " mm\n";
+  }
+  res.all = all.scores();
+  res.mask_iou = uni > 0 ? inter / uni : 0;
+  for (const auto& [name, values] : cond)
+    for (const auto& [value, m] : values) res.by_condition[name][value] = m.scores();
+  res.scenes = spec.scenes.size();
+  return res;
+}
+
+namespace {
+nlohmann::ordered_json scores_json(const PoseScores& s) {
+  return {{"mpjpe_mm", s.mpjpe_mm}, {"pck150", s.pck150}, {"auc", s.auc}, {"mpjpe_root_mm", s.mpjpe_root_mm},
+          {"pck150_root", s.pck150_root}, {"auc_root", s.auc_root}, {"frames", s.frames}};
+}
+const char* kJointNames[kJoints] = {"head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",
+                                    "handR", "handL", "kneeR", "kneeL", "footR", "footL"};
+}  // namespace
+
+std::string eval_json(const EvalResult& r) {
+  nlohmann::ordered_json j = scores_json(r.all);
+  j["config"] = r.config;
+  j["scenes"] = r.scenes;
+  j["mask_iou"] = r.mask_iou;
+  nlohmann::ordered_json pj;
+  for (int i = 0; i < kJoints; ++i) pj[kJointNames[i]] = r.all.mpjpe_per_joint[std::size_t(i)];
+  j["mpjpe_per_joint_mm"] = pj;
+  nlohmann::ordered_json bc;
+  for (const auto& [name, values] : r.by_condition)
+    for (const auto& [value, s] : values) bc[name][value] = scores_json(s);
+  j["by_condition"] = bc;
+  return j.dump(2) + "\n";
+}
+
+std::string eval_table(const EvalResult& r) {
+  std::ostringstream o;
+  o << std::fixed << std::setprecision(1);
+  o << "config " << r.config << ", " << r.scenes << " scenes, " << r.all.frames << " frames\n"
+    << "MPJPE " << r.all.mpjpe_mm << " mm, PCK@150 " << std::setprecision(3) << r.all.pck150 << ", AUC " << r.all.auc
+    << std::setprecision(1) << "; root-aligned: MPJPE " << r.all.mpjpe_root_mm << " mm, PCK@150 " << std::setprecision(3)
+    << r.all.pck150_root << ", AUC " << r.all.auc_root << "; mask IoU " << r.mask_iou << "\n";
+  o << std::setprecision(1) << "per joint (mm):";
+  for (int i = 0; i < kJoints; ++i) o << " " << kJointNames[i] << " " << r.all.mpjpe_per_joint[std::size_t(i)];
+  o << "\n";
+  for (const auto& [name, values] : r.by_condition) {
+    o << name << ":";
+    for (const auto& [value, s] : values) o << "  " << value << " " << s.mpjpe_mm << " mm (" << s.frames << " frames)";
+    o << "\n";
+  }
+  return o.str();
+}
+
+}  // namespace yelan::train

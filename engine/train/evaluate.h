@@ -1,0 +1,42 @@
+// Evaluation (SPEC section 7) on simulated test scenes: both networks as deployed (BN
+// folded, the mask net's current mask binarised at 0.1 multiplying the TORE), joints
+// denormalised with the true head depth (the paper protocol); MPJPE, PCK@150 and AUC, also
+// root-aligned, per joint and per condition, and the mask IoU of stage 1.
+#pragma once
+#include <map>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "camera/sim/simulator.h"
+#include "engine/train/metrics.h"
+
+namespace yelan::train {
+
+struct EvalSpec {
+  std::string weights;
+  std::vector<camera::sim::SimSpec> scenes;
+  std::uint64_t seed = 1;
+  double seconds_per_scene = 1.0;
+  bool true_mask = false;  // multiply by the simulator's mask instead of the mask net's
+};
+
+struct EvalResult {
+  PoseScores all;
+  double mask_iou = 0;
+  // condition name -> value -> scores (lighting, background, view, character, clothing, occlusion)
+  std::map<std::string, std::map<std::string, PoseScores>> by_condition;
+  std::string config;
+  std::uint64_t scenes = 0;
+};
+
+EvalResult evaluate(const EvalSpec& spec, std::ostream& err);
+
+// `count` test-split presets drawn with `seed`, conditions (view x light x background)
+// taking turns so every one is covered evenly.
+std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count);
+
+std::string eval_json(const EvalResult& r);
+std::string eval_table(const EvalResult& r);
+
+}  // namespace yelan::train
