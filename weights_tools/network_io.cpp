@@ -79,4 +79,16 @@ void randomise_batchnorm(layers::ParamList& params, std::uint64_t seed) {
   }
 }
 
+LoadedNetworks::LoadedNetworks(const Weights& w, const std::string& path)
+    : cfg(parse_model_config(w.config_json, path + ": attribute config")), mask(cfg), pose(cfg) {
+  mask.params(mp);
+  pose.params(pp);
+  load_group(w, "mask", mp);
+  load_group(w, "pose", pp);
+  mask.weights_changed();
+  pose.weights_changed();
+  mask.set_training(false);
+  pose.set_training(false);
+}
+
 }  // namespace yelan::weights

@@ -6,6 +6,9 @@
 #include <map>
 #include <string>
 
+#include "engine/mask_net.h"
+#include "engine/model_config.h"
+#include "engine/pose_net.h"
 #include "layers/param.h"
 #include "weights_tools/weights_file.h"
 
@@ -18,5 +21,15 @@ std::map<std::string, Tensor> group_of(const layers::ParamList& params);
 // N(0, 0.1), variances U(0.5, 1.5), weights U(0.75, 1.25), biases U(-0.1, 0.1),
 // num_batches_tracked U{1..9999}), so that a forward pass depends on every BN tensor.
 void randomise_batchnorm(layers::ParamList& params, std::uint64_t seed);
+
+// Both networks built from a weights file's config and loaded with its tensors, in
+// inference mode (BN with running statistics).
+struct LoadedNetworks {
+  ModelConfig cfg;
+  MaskNet mask;
+  PoseNet pose;
+  layers::ParamList mp, pp;
+  LoadedNetworks(const Weights& w, const std::string& path);
+};
 
 }  // namespace yelan::weights

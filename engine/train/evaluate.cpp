@@ -40,19 +40,10 @@ std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count) {
 }
 
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
-  const weights::Weights w = weights::load_weights(spec.weights);
-  const ModelConfig cfg = parse_model_config(w.config_json, spec.weights + ": attribute config");
-  MaskNet mask(cfg);
-  PoseNet pose(cfg);
-  layers::ParamList mp, pp;
-  mask.params(mp);
-  pose.params(pp);
-  weights::load_group(w, "mask", mp);
-  weights::load_group(w, "pose", pp);
-  mask.weights_changed();
-  pose.weights_changed();
-  mask.set_training(false);
-  pose.set_training(false);
+  weights::LoadedNetworks nets(weights::load_weights(spec.weights), spec.weights);
+  const ModelConfig& cfg = nets.cfg;
+  MaskNet& mask = nets.mask;
+  PoseNet& pose = nets.pose;
   layers::NoGrad no_grad;
 
   EvalResult res;
