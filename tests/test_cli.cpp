@@ -65,7 +65,7 @@ TEST_CASE("global --isa forces the kernel ISA and --threads the thread count", "
   yelan::set_threads(saved_threads);
 }
 
-TEST_CASE("every command answers --help; one not built yet fails with exit 1", "[cli]") {
+TEST_CASE("every command answers --help, and one not built yet fails with exit 1", "[cli]") {
   for (const auto& c : yelan::cli::commands()) {
     INFO(c.name);
     Result h = cli({c.name, "--help"});

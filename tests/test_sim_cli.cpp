@@ -20,7 +20,7 @@ struct TempDir : yelan::test::CliTempDir {
 };
 }  // namespace
 
-TEST_CASE("yelan sim: the same arguments give the same bytes; yelan info reads the result", "[cli][sim]") {
+TEST_CASE("yelan sim: the same arguments give the same bytes, and yelan info reads the result", "[cli][sim]") {
   TempDir d;
   const std::vector<std::string> args = {"sim", "--preset", "ben-dance3-front-high-static", "--seed", "4", "--duration",
                                          "60ms"};

@@ -58,7 +58,7 @@ TEST_CASE("train: MPJPE, PCK@150 and AUC by hand, paper protocol and root-aligne
   CHECK(r.scores().pck150_root == 1);
 }
 
-TEST_CASE("train: a short run writes its log and checkpoints; --resume continues bit-exactly", "[train][cli]") {
+TEST_CASE("train: a short run writes its log and checkpoints, and --resume continues bit-exactly", "[train][cli]") {
   yelan::test::CliTempDir d("train");
   const std::vector<std::string> base = {"train", "--stage", "pose", "--config", "micro", "--sim",
                                          "ben-dance3-front-high-static,lena-dance4-left-medium-dynamic",
