@@ -85,7 +85,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
   static const std::vector<std::string> known = {
       "preset", "name", "character", "motion", "speed", "mirror", "yaw_offset_deg", "static_legs", "view", "yaw_deg",
       "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "flicker", "background", "occluders",
-      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "pixel", "mocap_dir"};
+      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir"};
   for (auto& [key, value] : j.items())
     if (std::find(known.begin(), known.end(), key) == known.end())
       throw std::invalid_argument(what + ": unknown key '" + key + "'");
@@ -125,6 +125,8 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     num(j, "max_step_s", s.max_step_s);
     num(j, "min_step_s", s.min_step_s);
     num(j, "step_lambda", s.step_lambda);
+    num(j, "max_render_step_s", s.max_render_step_s);
+    num(j, "render_lambda", s.render_lambda);
     if (j.contains("pixel")) {
       const auto& p = j.at("pixel");
       PixelParams& q = s.pixel;

@@ -72,9 +72,12 @@ Simulator::Simulator(const SimSpec& spec)
     throw std::invalid_argument("duration must be in (0 s, 24 h], got " + std::to_string(spec.duration_s));
   if (!(spec.label_hz >= 1 && spec.label_hz <= 10000) || !(spec.mask_hz >= 1 && spec.mask_hz <= 1000))
     throw std::invalid_argument("label rate must be 1..10000 Hz and mask rate 1..1000 Hz");
-  if (!(spec.min_step_s > 0 && spec.min_step_s <= spec.max_step_s && spec.max_step_s <= 0.1))
-    throw std::invalid_argument("need 0 < min_step <= max_step <= 0.1 s");
-  dt_ = spec.max_step_s;
+  if (!(spec.min_step_s > 0 && spec.min_step_s <= spec.max_step_s && spec.max_step_s <= 0.1 &&
+        spec.max_render_step_s > 0 && spec.max_render_step_s <= 0.1))
+    throw std::invalid_argument("need 0 < min_step <= max_step <= 0.1 s and 0 < max_render_step <= 0.1 s");
+  if (!(spec.step_lambda > 0) || !(spec.render_lambda > 0)) throw std::invalid_argument("step lambdas must be > 0");
+  pixel_dt_ = spec.max_step_s;
+  render_dt_ = std::max(spec.max_render_step_s, spec.max_step_s);
 }
 
 Simulator::~Simulator() = default;
@@ -92,9 +95,17 @@ double Simulator::image_speed(const BodyPose& a, const BodyPose& b, double dt) c
   return worst / dt;
 }
 
+double Simulator::motion_time(double t_s) const {
+  // Past its end a clip plays backwards, then forwards again: positions stay continuous.
+  const double d = motion_->duration_s();
+  if (!(d > 0) || t_s <= d) return t_s;
+  const double m = std::fmod(t_s, 2 * d);
+  return m <= d ? m : 2 * d - m;
+}
+
 void Simulator::sample(double t_s) {
   prev_pose_ = pose_;
-  pose_ = motion_->at(t_s);
+  pose_ = motion_->at(motion_time(t_s));
   const BodyPose& pose = pose_;
   dresser_.update(pose, t_s);
   prims_.clear();
@@ -106,7 +117,7 @@ void Simulator::sample(double t_s) {
 }
 
 Label Simulator::label_at(double t_s) const {
-  const Joints13 world = dhp19_joints(motion_->at(t_s));
+  const Joints13 world = dhp19_joints(motion_->at(motion_time(t_s)));
   const CameraModel& cam = scene_.camera();
   Label l;
   l.t_us = std::llround(t_s * 1e6);
@@ -143,17 +154,35 @@ void Simulator::run_until(double t_end_s, SimSink& sink) {
   };
   emit_labels(t_);
   while (t_ < t_end_s - 1e-12) {
-    // Land exactly on mask ticks, so each mask is a rendered sample.
+    // The next rendered keyframe; it lands exactly on mask ticks, so each mask is rendered.
     const double t_mask = next_mask_ * mask_dt;
-    double t1 = std::min({t_ + dt_, t_end_s, t_mask});
+    double t1 = std::min({t_ + render_dt_, t_end_s, t_mask});
     if (t_mask - t1 < spec_.min_step_s * 0.5 && t_mask <= t_end_s) t1 = t_mask;
+    prev_intensity_.assign(frame_.intensity.begin(), frame_.intensity.end());
     sample(t1);
-    events_.clear();
+    // Pixel steps between the keyframes over linearly interpolated intensity (as v2e does
+    // between frames); event times are interpolated within each step by the pixel model.
+    const int n = std::max(1, int(std::ceil((t1 - t_) / pixel_dt_ - 1e-9)));
     const auto p0 = std::chrono::steady_clock::now();
-    pixel_.step(frame_.intensity.data(), t_, t1, events_);
+    double ts0 = t_;
+    for (int i = 1; i <= n; ++i) {
+      const double ts = i == n ? t1 : t_ + (t1 - t_) * i / n;
+      const float* in = frame_.intensity.data();
+      if (i < n) {
+        const float w = float(i) / float(n);
+        interp_.resize(prev_intensity_.size());
+        for (std::size_t k = 0; k < interp_.size(); ++k)
+          interp_[k] = prev_intensity_[k] + w * (frame_.intensity[k] - prev_intensity_[k]);
+        in = interp_.data();
+      }
+      events_.clear();
+      pixel_.step(in, ts0, ts, events_);
+      ++stats_.pixel_steps;
+      stats_.events += events_.size();
+      if (!events_.empty()) sink.events(events_);
+      ts0 = ts;
+    }
     stats_.pixel_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - p0).count();
-    stats_.events += events_.size();
-    if (!events_.empty()) sink.events(events_);
     emit_labels(t1);
     if (std::abs(t1 - t_mask) < 1e-12) {
       sink.mask(std::llround(t_mask * 1e6), frame_);
@@ -163,17 +192,21 @@ void Simulator::run_until(double t_end_s, SimSink& sink) {
     const double step = t1 - t_;
     step_sum_ += step;
     stats_.min_step_s = stats_.min_step_s == 0 ? step : std::min(stats_.min_step_s, step);
-    // The next step: edges may move at most step_lambda pixels (so a pixel's log intensity
-    // moves by at most that fraction of the edge's contrast), flicker at most step_lambda
-    // thresholds. Image speed from the body points' projections over this step.
+    // Next steps from the fastest body point's image speed over this one: a pixel step moves
+    // edges at most step_lambda px (a pixel's log intensity by that fraction of the edge's
+    // contrast), a keyframe at most render_lambda px; flicker, which interpolation between
+    // keyframes would miss, bounds both to step_lambda thresholds of log change.
     const double speed = image_speed(prev_pose_, pose_, step);
-    double want = speed > 1e-6 ? spec_.step_lambda / speed : spec_.max_step_s;
+    double want_pixel = speed > 1e-6 ? spec_.step_lambda / speed : spec_.max_step_s;
+    double want_render = speed > 1e-6 ? spec_.render_lambda / speed : spec_.max_render_step_s;
     if (spec_.scene.flicker) {
       const Lighting l = lighting(spec_.scene.light, true);
       const double rate = 2 * 3.141592653589793 * l.flicker_hz * l.flicker_depth;  // peak d(log I)/dt
-      want = std::min(want, lambda / rate);
+      want_pixel = std::min(want_pixel, lambda / rate);
+      want_render = std::min(want_render, lambda / rate);
     }
-    dt_ = std::clamp(want, spec_.min_step_s, spec_.max_step_s);
+    pixel_dt_ = std::clamp(want_pixel, spec_.min_step_s, spec_.max_step_s);
+    render_dt_ = std::clamp(want_render, pixel_dt_, std::max(spec_.max_render_step_s, spec_.max_step_s));
     t_ = t1;
   }
   stats_.mean_step_s = stats_.samples > 1 ? step_sum_ / double(stats_.samples - 1) : 0;

@@ -1,6 +1,7 @@
-// The virtual camera: a character performing a motion in a scene, rendered at an adaptive
-// rate (ESIM: the next sample comes sooner when log intensity moved fast in the last one)
-// and turned into events by the pixel model, with exact labels: 3D joints in the camera
+// The virtual camera: a character performing a motion in a scene, rendered into keyframes at
+// an adaptive rate (the next one sooner when the body moved fast in the image: ESIM's rule)
+// and turned into events by the pixel model stepping at >= 1 kHz over intensity interpolated
+// between keyframes, with exact labels: 3D joints in the camera
 // frame at label_hz, the human mask at mask_hz. Results go to a SimSink: a recording file,
 // the trainer's stream, previews. Deterministic given the seed, whatever the thread count.
 #pragma once
@@ -33,10 +34,12 @@ struct SimSpec {
   std::uint64_t seed = 1;
   double label_hz = 300;            // 3D joints
   double mask_hz = 50;              // human masks (the training frame rate)
-  double max_step_s = 1e-3;         // the slowest sampling: 1 kHz
-  double min_step_s = 5e-5;         // the fastest: 20 kHz
-  double step_lambda = 0.5;         // per step, edges move at most this many pixels and
+  double max_step_s = 1e-3;         // pixel model steps: at least 1 kHz
+  double min_step_s = 5e-5;         // and at most 20 kHz
+  double step_lambda = 0.5;         // per pixel step, edges move at most this many pixels and
                                     // flicker changes log intensity by at most this many thresholds
+  double max_render_step_s = 4e-3;  // rendered keyframes at least every 4 ms ...
+  double render_lambda = 2.0;       // ... and whenever edges may have moved this many pixels
   std::string mocap_dir;            // where BVH stems are looked up (default: ../shared/data/mocap)
 };
 
@@ -56,8 +59,9 @@ class SimSink {
 };
 
 struct SimStats {
-  std::uint64_t samples = 0, events = 0, labels = 0, masks = 0;
-  double min_step_s = 0, mean_step_s = 0;
+  std::uint64_t samples = 0, events = 0, labels = 0, masks = 0;  // samples: rendered keyframes
+  std::uint64_t pixel_steps = 0;
+  double min_step_s = 0, mean_step_s = 0;  // between keyframes
   double render_wall_s = 0, pixel_wall_s = 0;  // time spent rendering and in the pixel model
   PixelStats pixel;
 };
@@ -69,6 +73,7 @@ class Simulator {
   const SimSpec& spec() const { return spec_; }
   const CameraModel& camera() const { return scene_.camera(); }
   double duration_s() const { return spec_.duration_s; }
+  double motion_duration_s() const { return motion_->duration_s(); }
   double time_s() const { return t_; }
   // Runs from the current time to min(t_end_s, duration), feeding the sink.
   void run_until(double t_end_s, SimSink& sink);
@@ -80,6 +85,7 @@ class Simulator {
 
  private:
   void sample(double t_s);  // pose -> clothes -> render into frame_
+  double motion_time(double t_s) const;  // clips longer than their motion play back and forth
   double image_speed(const BodyPose& a, const BodyPose& b, double dt) const;  // px/s, fastest body point
   BodyPose pose_{}, prev_pose_{};
   SimSpec spec_;
@@ -91,7 +97,8 @@ class Simulator {
   RenderedFrame frame_;
   std::vector<Primitive> prims_;
   std::vector<Event> events_;
-  double t_ = 0, dt_ = 0;
+  double t_ = 0, pixel_dt_ = 0, render_dt_ = 0;
+  std::vector<float> prev_intensity_, interp_;
   std::int64_t next_label_ = 0, next_mask_ = 0;  // tick indices
   bool started_ = false;
   SimStats stats_;

@@ -75,8 +75,10 @@ void show_progress(double t, double total, void* ctx) {
 
 std::string stats_line(const sim::SimStats& s, double duration, double wall) {
   std::ostringstream o;
-  o << s.events << " events (" << std::llround(double(s.events) / duration) << " ev/s), " << s.samples << " samples (mean step "
-    << std::fixed << std::setprecision(3) << s.mean_step_s * 1e3 << " ms, min " << s.min_step_s * 1e3 << " ms), "
+  o << s.events << " events (" << std::llround(double(s.events) / duration) << " ev/s), " << s.samples
+    << " rendered keyframes (mean interval " << std::fixed << std::setprecision(3) << s.mean_step_s * 1e3 << " ms, min "
+    << s.min_step_s * 1e3 << " ms), " << s.pixel_steps << " pixel steps (" << std::setprecision(0)
+    << double(s.pixel_steps) / duration << " Hz), "
     << s.labels << " labels, " << s.masks << " masks; " << std::setprecision(2) << duration / wall
     << "x real time";
   return o.str();
