@@ -21,6 +21,10 @@ class PoseNet {
   void init(std::uint64_t seed);
   void set_training(bool on);
   void weights_changed();
+  // Causal configs only: each forward continues the ConvLSTM state of the previous one (a
+  // live stream fed a frame at a time); reset_stream() starts a new window.
+  void set_streaming(bool on) { cl_.set_streaming(on); }
+  void reset_stream() { cl_.reset_state(); }
 
   // x: B windows of S frames (frame t of window b is image b*S + t), cfg.channels x H x W.
   void forward(const layers::Act& x, int frames_per_window);

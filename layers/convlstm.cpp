@@ -1,5 +1,7 @@
 #include "layers/convlstm.h"
 
+#include <algorithm>
+
 #include <cstring>
 #include <stdexcept>
 
@@ -63,6 +65,8 @@ void WindowConvLSTM::weights_changed() {
 void WindowConvLSTM::run_direction(const Act& x, int dir) {
   const int hb = (hidden_ + 15) / 16;
   auto& steps = steps_[dir];
+  if (streaming_ && B_ != 1) throw std::invalid_argument("convlstm: streaming runs one window at a time");
+  const bool carried = streaming_ && have_state_ && carry_h_.size() == Act{nullptr, 1, hidden_, x.h, x.w}.floats();
   steps.resize(S_);
   for (int k = 0; k < S_; ++k) {
     const int t = dir == 0 ? k : S_ - 1 - k;  // processing order
@@ -70,7 +74,9 @@ void WindowConvLSTM::run_direction(const Act& x, int dir) {
     const Act cat = st.cat.get(B_, in_ + hidden_, x.h, x.w);
     for (int b = 0; b < B_; ++b) {
       copy_channels(x, b * S_ + t, 0, cat, b, 0, in_);
-      if (k == 0) {
+      if (k == 0 && carried) {
+        copy_channels(Act{carry_h_.data(), 1, hidden_, x.h, x.w}, 0, 0, cat, b, in_, hidden_);
+      } else if (k == 0) {
         for (int c = 0; c < hidden_; ++c)
           for (std::size_t p = 0; p < cat.pixels(); ++p) *lane_ptr(cat, b, in_ + c, p) = 0.f;
       } else {
@@ -88,9 +94,23 @@ void WindowConvLSTM::run_direction(const Act& x, int dir) {
     const Act act = st.act.get(B_, 4 * hb * 16, x.h, x.w);
     const Act c = st.c.get(B_, hidden_, x.h, x.w), tc = st.tanh_c.get(B_, hidden_, x.h, x.w);
     const Act h = st.h.get(B_, hidden_, x.h, x.w);
-    const float* c_prev = k == 0 ? nullptr : steps[dir == 0 ? t - 1 : t + 1].c.get(B_, hidden_, x.h, x.w).data;
+    const float* c_prev = k == 0 ? (carried ? carry_c_.data() : nullptr)
+                                 : steps[dir == 0 ? t - 1 : t + 1].c.get(B_, hidden_, x.h, x.w).data;
     kernels::lstm_kernels().fwd({B_, hb, x.pixels()}, grouped.data, c_prev, act.data, c.data, h.data, tc.data);
   }
+  if (streaming_) {  // keep the last state for the next call
+    const Act h = steps[S_ - 1].h.get(B_, hidden_, x.h, x.w), c = steps[S_ - 1].c.get(B_, hidden_, x.h, x.w);
+    if (carry_h_.size() != h.floats()) carry_h_ = Floats(h.floats()), carry_c_ = Floats(c.floats());
+    std::copy_n(h.data, h.floats(), carry_h_.data());
+    std::copy_n(c.data, c.floats(), carry_c_.data());
+    have_state_ = true;
+  }
+}
+
+void WindowConvLSTM::set_streaming(bool on) {
+  if (on && bidir_) throw std::invalid_argument("convlstm: streaming needs the causal (forward-only) mode");
+  streaming_ = on;
+  have_state_ = false;
 }
 
 Act WindowConvLSTM::forward(const Act& x, int frames_per_window) {

@@ -21,6 +21,11 @@ class WindowConvLSTM {
   Act forward(const Act& x, int frames_per_window);
   void backward(const Act& x, const Act& dy, const Act& dx);
   int hidden() const { return hidden_; }
+  // Streaming (causal only, one window of any length per call): each forward starts from the
+  // state the previous one ended in, instead of zeros; reset_state() starts afresh. Frame k
+  // of a window then costs one step, and gives what the window forward gives for frame k.
+  void set_streaming(bool on);
+  void reset_state() { have_state_ = false; }
 
  private:
   struct Step {  // what BPTT needs from one time step of one direction
@@ -28,6 +33,8 @@ class WindowConvLSTM {
   };
   int in_, hidden_, S_ = 0, B_ = 0;
   bool bidir_;
+  bool streaming_ = false, have_state_ = false;
+  Floats carry_h_, carry_c_;
   Conv2d cell_, fuse_;
   std::vector<Step> steps_[2];
   ActBuf gates_, grouped_, fuse_in_, y_, dfuse_in_, dgrouped_, dgates_, dcat_, dh_next_, dc_next_, dc_prev_, dh_;

@@ -196,3 +196,29 @@ TEST_CASE("mask net forward shapes, scores in (0, 1), gradients by finite differ
   }
   CHECK(checked >= 10);
 }
+
+TEST_CASE("causal pose net streamed a frame at a time equals the window forward", "[networks][pose]") {
+  // micro: causal ConvLSTM, window 2; stream 3 frames of a longer window.
+  const ModelConfig cfg = load_model_config("micro");
+  REQUIRE_FALSE(cfg.bidirectional);
+  const int S = 3;
+  PoseNet net(cfg);
+  net.init(5);
+  net.set_training(false);
+  yelan::test::Owned x(S, cfg.channels, cfg.height(), cfg.width(), 7);
+  net.forward(x.act, S);
+  const std::vector<float> window = net.joints();
+  net.set_streaming(true);
+  const std::size_t per = std::size_t(cfg.joints) * 3;
+  for (int round = 0; round < 2; ++round) {  // reset_stream() starts the window again
+    net.reset_stream();
+    for (int t = 0; t < S; ++t) {
+      const layers::Act frame{x.act.data + std::size_t(t) * x.act.cb() * x.act.pixels() * 16, 1, x.act.c, x.act.h, x.act.w};
+      net.forward(frame, 1);
+      for (std::size_t i = 0; i < per; ++i) REQUIRE(net.joints()[i] == Approx(window[t * per + i]).margin(1e-5));
+    }
+  }
+  PoseNet bidir(load_model_config("tiny"));
+  CHECK_THROWS_AS(bidir.set_streaming(true), std::invalid_argument);
+  net.set_streaming(false);
+}
