@@ -27,10 +27,7 @@ BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource sourc
   if (source == MaskSource::net) one_.resize(cfg.window, cfg.channels, h, w);
 }
 
-namespace {
-
-// Mean of each d x d cell of a (C x H x W, channel-major) volume into frame `n` of a blocked act.
-void downscale_into(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
+void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
   const int C = a.c, H = a.h, W = a.w;
   const float inv = 1.f / float(d * d);
   for (int c = 0; c < C; ++c) {
@@ -45,6 +42,8 @@ void downscale_into(const std::vector<float>& vol, int sensor_h, int sensor_w, i
       }
   }
 }
+
+namespace {
 
 // Fraction of human pixels in each d x d cell.
 std::vector<float> mask_cells(const std::vector<std::uint8_t>& m, int sensor_w, int d, int H, int W) {
@@ -83,8 +82,8 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
   for (int t = 0; t < S; ++t) {
     const int n = used_ * S + t;
     const auto& f = w.frames[std::size_t(t)];
-    downscale_into(f.tore, sh, sw, d, in, n);
-    if (source_ == MaskSource::net) downscale_into(f.tore, sh, sw, d, one_.act, t);
+    downscale_tore(f.tore, sh, sw, d, in, n);
+    if (source_ == MaskSource::net) downscale_tore(f.tore, sh, sw, d, one_.act, t);
     if (source_ == MaskSource::truth) {
       auto cells = mask_cells(f.mask, sw, d, H, W);
       for (float& c : cells) c = c > 0 ? 1.f : 0.f;  // any human pixel keeps the cell

@@ -17,6 +17,10 @@ namespace yelan::train {
 
 enum class MaskSource { none, truth, net };
 
+// Mean of each d x d cell of a TORE volume (C x H x W, channel-major, the sensor's size) into
+// frame n of a blocked activation of the model's input size.
+void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n);
+
 struct OwnedAct {
   layers::Floats mem;
   layers::Act act;

@@ -1,0 +1,249 @@
+#include "engine/run/pipeline.h"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "camera/repr/tore.h"
+#include "engine/train/batch.h"
+#include "engine/train/pose_norm.h"
+#include "weights_tools/network_io.h"
+
+namespace yelan::run {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+constexpr double kTrainFrameHz = 50;  // the rate the future masks were trained at
+constexpr double kFocalPx = 485;      // DAVIS346 with its standard lens
+
+// Limb bones over the DHP19 joints (shoulder-elbow, elbow-hand, hip-knee, knee-foot, both
+// sides) and their share of standing height (Drillis-Contini, as the simulator's bodies).
+constexpr int kBones[8][2] = {{1, 3}, {3, 7}, {2, 4}, {4, 8}, {5, 9}, {9, 11}, {6, 10}, {10, 12}};
+constexpr double kBoneShare[8] = {0.186, 0.146, 0.186, 0.146, 0.245, 0.246, 0.245, 0.246};
+
+}  // namespace
+
+double head_depth_from_height(const std::array<std::array<double, 3>, 13>& unit, double height_mm) {
+  double sum = 0, prior = 0;
+  for (int b = 0; b < 8; ++b) {
+    const auto& p = unit[std::size_t(kBones[b][0])];
+    const auto& q = unit[std::size_t(kBones[b][1])];
+    sum += std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+    prior += kBoneShare[b] * height_mm;
+  }
+  return sum > 1e-9 ? prior / sum : 0;
+}
+
+struct PosePipeline::Impl {
+  weights::Weights w;
+  weights::LoadedNetworks nets;
+  RunOptions opt;
+  camera::ToreVolume tore;
+  std::vector<float> vol;
+  train::OwnedAct frame, unmasked, window;
+  train::Intrinsics k;
+  std::int64_t dt_us, next_tick = std::numeric_limits<std::int64_t>::min();
+  bool started = false;
+  std::uint64_t events_since = 0;
+  // stage 1
+  bool have_masks = false;
+  std::int64_t mask_t = 0;
+  std::vector<std::vector<float>> masks;  // N binarised masks, H x W
+  std::vector<float> scores;
+  // stage 2
+  int slot = 0;
+  std::vector<std::int64_t> slot_t;
+  std::vector<bool> slot_mask_ran;
+  Pose last;
+  bool have_last = false;
+  RunStats stats;
+
+  Impl(const std::string& path, int sw, int sh, const RunOptions& o)
+      : w(weights::load_weights(path)), nets(w, path), opt(o), tore(sw, sh) {
+    const ModelConfig& cfg = nets.cfg;
+    if (sw != cfg.sensor_width || sh != cfg.sensor_height)
+      throw std::invalid_argument("the events are " + std::to_string(sw) + "x" + std::to_string(sh) + ", the model (" +
+                                  path + ") expects " + std::to_string(cfg.sensor_width) + "x" +
+                                  std::to_string(cfg.sensor_height));
+    if (!(o.rate_hz >= 1 && o.rate_hz <= 1000)) throw std::invalid_argument("rate must be 1..1000 poses per second");
+    dt_us = std::llround(1e6 / o.rate_hz);
+    vol.resize(tore.volume_size());
+    frame.resize(1, cfg.channels, cfg.height(), cfg.width());
+    unmasked.resize(1, cfg.channels, cfg.height(), cfg.width());
+    if (cfg.bidirectional) window.resize(cfg.window, cfg.channels, cfg.height(), cfg.width());
+    else nets.pose.set_streaming(true);
+    slot_t.resize(std::size_t(cfg.window));
+    slot_mask_ran.resize(std::size_t(cfg.window));
+    k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
+  }
+
+  void emit_poses(int frames, const std::function<void(const Pose&)>& out) {
+    const ModelConfig& cfg = nets.cfg;
+    const std::vector<float>& jn = nets.pose.joints();
+    const layers::Act& xy = nets.pose.heatmap(cfg.stages - 1, 0);
+    for (int f = 0; f < frames; ++f) {
+      std::array<std::array<double, 3>, 13> unit;
+      for (int j = 0; j < 13; ++j) {
+        const float* q = &jn[(std::size_t(f) * cfg.joints + j) * 3];
+        unit[std::size_t(j)] = train::denormalise_joint({q[0], q[1], q[2]}, k, 1.0);
+      }
+      const double z = opt.fixed_depth_mm > 0 ? opt.fixed_depth_mm : head_depth_from_height(unit, opt.body_height_mm);
+      Pose p;
+      p.t_us = slot_t[std::size_t(f)];
+      p.mask_ran = slot_mask_ran[std::size_t(f)];
+      p.head_depth_mm = z;
+      double conf = 0;
+      for (int j = 0; j < 13; ++j) {
+        for (int c = 0; c < 3; ++c) p.joints_mm[std::size_t(j)][std::size_t(c)] = float(unit[std::size_t(j)][std::size_t(c)] * z);
+        float peak = 0;
+        const float* hm = xy.data + (std::size_t(f) * xy.cb() + j / 16) * xy.pixels() * 16 + j % 16;
+        for (std::size_t i = 0; i < xy.pixels(); ++i) peak = std::max(peak, hm[i * 16]);
+        conf += peak;
+      }
+      p.confidence = float(conf / 13);
+      last = p;
+      have_last = true;
+      ++stats.poses;
+      out(p);
+    }
+  }
+
+  void tick(std::int64_t T, const std::function<void(const Pose&)>& out) {
+    const ModelConfig& cfg = nets.cfg;
+    const auto t_tick = Clock::now();
+    ++stats.ticks;
+    if (opt.skip_empty && events_since == 0 && have_last && !cfg.bidirectional) {
+      Pose p = last;
+      p.t_us = T;
+      p.stale = true;
+      p.mask_ran = false;
+      ++stats.stale;
+      ++stats.poses;
+      out(p);
+      return;
+    }
+    events_since = 0;
+    layers::NoGrad no_grad;
+    auto t0 = Clock::now();
+    tore.readout(T, vol.data());
+    train::downscale_tore(vol, tore.height(), tore.width(), cfg.downscale, unmasked.act, 0);
+    stats.times.tore_ms.push_back(ms_since(t0));
+    // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
+    t0 = Clock::now();
+    const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
+    const bool run_mask = !have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < opt.beta;
+    int use = idx;
+    if (run_mask) {
+      nets.mask.forward(unmasked.act);
+      const layers::Act& m = nets.mask.masks();
+      const float cut = std::log(0.1f / 0.9f);  // sigmoid > 0.1
+      masks.assign(std::size_t(cfg.n_masks), std::vector<float>(m.pixels()));
+      for (int c = 0; c < cfg.n_masks; ++c) {
+        const float* p = m.data + std::size_t(c / 16) * m.pixels() * 16 + c % 16;
+        for (std::size_t i = 0; i < m.pixels(); ++i) masks[std::size_t(c)][i] = p[i * 16] > cut ? 1.f : 0.f;
+      }
+      scores = nets.mask.scores();
+      mask_t = T;
+      have_masks = true;
+      use = 0;
+      ++stats.mask_runs;
+    }
+    stats.times.stage1_ms.push_back(ms_since(t0));
+    // Masked TORE -> stage 2.
+    t0 = Clock::now();
+    const layers::Act& dst = cfg.bidirectional ? window.act : frame.act;
+    const int n = cfg.bidirectional ? slot : 0;
+    const std::size_t plane = unmasked.act.pixels() * 16, per_frame = std::size_t(unmasked.act.cb()) * plane;
+    const std::vector<float>& keep = masks[std::size_t(use)];
+    for (int cb = 0; cb < unmasked.act.cb(); ++cb)
+      for (std::size_t i = 0; i < unmasked.act.pixels(); ++i)
+        for (int l = 0; l < 16; ++l)
+          dst.data[std::size_t(n) * per_frame + cb * plane + i * 16 + l] = unmasked.act.data[cb * plane + i * 16 + l] * keep[i];
+    slot_t[std::size_t(slot)] = T;
+    slot_mask_ran[std::size_t(slot)] = run_mask;
+    if (!cfg.bidirectional) {
+      if (slot == 0) nets.pose.reset_stream();  // windows of S ticks, as trained
+      nets.pose.forward(frame.act, 1);
+      slot_t[0] = T;
+      slot_mask_ran[0] = run_mask;
+      slot = (slot + 1) % cfg.window;
+      emit_poses(1, out);
+    } else if (++slot == cfg.window) {
+      nets.pose.forward(window.act, cfg.window);
+      slot = 0;
+      emit_poses(cfg.window, out);
+    }
+    stats.times.stage2_ms.push_back(ms_since(t0));
+    stats.times.tick_ms.push_back(ms_since(t_tick));
+  }
+};
+
+PosePipeline::PosePipeline(const std::string& weights, int sw, int sh, const RunOptions& opt)
+    : impl_(std::make_unique<Impl>(weights, sw, sh, opt)) {}
+PosePipeline::~PosePipeline() = default;
+
+void PosePipeline::push(std::span<const camera::Event> events, const std::function<void(const Pose&)>& out) {
+  Impl& m = *impl_;
+  for (const camera::Event& e : events) {
+    if (!m.started) {
+      m.started = true;
+      m.next_tick = e.t + m.dt_us;
+    }
+    while (e.t > m.next_tick) {
+      m.tick(m.next_tick, out);
+      m.next_tick += m.dt_us;
+    }
+    m.tore.update(e);
+    ++m.events_since;
+    ++m.stats.events;
+  }
+}
+
+void PosePipeline::finish(std::int64_t t_us, const std::function<void(const Pose&)>& out) {
+  Impl& m = *impl_;
+  if (!m.started) return;
+  while (m.next_tick <= t_us) {
+    m.tick(m.next_tick, out);
+    m.next_tick += m.dt_us;
+  }
+  // A partial bidirectional window: run it shorter rather than drop its poses.
+  if (m.nets.cfg.bidirectional && m.slot > 0) {
+    layers::NoGrad no_grad;
+    const layers::Act part{m.window.act.data, m.slot, m.window.act.c, m.window.act.h, m.window.act.w};
+    m.nets.pose.forward(part, m.slot);
+    const int n = m.slot;
+    m.slot = 0;
+    m.emit_poses(n, out);
+  }
+}
+
+const RunStats& PosePipeline::stats() const { return impl_->stats; }
+std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
+bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }
+
+std::string pose_csv_header() {
+  static const char* names[13] = {"head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",
+                                  "handR", "handL", "kneeR", "kneeL", "footR", "footL"};
+  std::string h = "t_us";
+  for (const char* n : names)
+    for (const char* c : {"x", "y", "z"}) h += std::string(",") + n + "_" + c;
+  return h + ",confidence,mask_ran";
+}
+
+std::string pose_csv_row(const Pose& p) {
+  std::ostringstream o;
+  o.setf(std::ios::fixed);
+  o.precision(1);
+  o << p.t_us;
+  for (const auto& j : p.joints_mm) o << "," << j[0] << "," << j[1] << "," << j[2];
+  o.precision(4);
+  o << "," << p.confidence << "," << (p.mask_ran ? 1 : 0);
+  return o.str();
+}
+
+}  // namespace yelan::run

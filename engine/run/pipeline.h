@@ -1,0 +1,72 @@
+// Streaming pose estimation (the product): events in, 13 joints in mm out, at any tick rate.
+// Per event the TORE volume is updated; at each tick it is read out and downscaled; stage 1
+// (the U-Net) runs only when the stored future mask for this tick has a score below beta
+// (the paper's early exit); the masked TORE goes through stage 2, causal (the ConvLSTM state
+// carried tick to tick, one tick of latency) or windowed bidirectional (a window of S ticks
+// of latency), as the model's config says; joints are denormalised with a depth estimate
+// (a body-height prior: the skeleton scales linearly with the head depth) or a given one.
+// A tick with no new events repeats the last pose, flagged, and skips both stages.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "camera/event.h"
+
+namespace yelan::run {
+
+struct RunOptions {
+  double rate_hz = 50;        // poses per second
+  double beta = 0.99;         // early-exit threshold on the mask scores; > 1 runs stage 1 every tick
+  double body_height_mm = 1700;  // the depth prior
+  double fixed_depth_mm = 0;  // > 0: use this head depth instead of the prior
+  bool skip_empty = true;     // no events since the last tick: repeat the last pose
+};
+
+struct Pose {
+  std::int64_t t_us = 0;
+  std::array<std::array<float, 3>, 13> joints_mm{};  // camera frame
+  float confidence = 0;       // mean over joints of the last stage's xy peak probability
+  bool mask_ran = false, stale = false;
+  double head_depth_mm = 0;
+};
+
+struct StageTimes {
+  std::vector<double> tore_ms, stage1_ms, stage2_ms, tick_ms;
+};
+
+struct RunStats {
+  std::uint64_t ticks = 0, mask_runs = 0, stale = 0, events = 0, poses = 0;
+  StageTimes times;
+};
+
+class PosePipeline {
+ public:
+  PosePipeline(const std::string& weights, int sensor_width, int sensor_height, const RunOptions& opt);
+  ~PosePipeline();
+  // Events in time order. Every tick whose time has passed is processed; poses go to `out`.
+  void push(std::span<const camera::Event> events, const std::function<void(const Pose&)>& out);
+  // Processes the ticks up to and including t_us (the end of a file), then flushes a partial window.
+  void finish(std::int64_t t_us, const std::function<void(const Pose&)>& out);
+  const RunStats& stats() const;
+  std::string config_name() const;
+  bool causal() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The depth prior: head depth at which the predicted skeleton's limb lengths (upper arms,
+// forearms, thighs, shanks) sum to a body of the given height (Drillis-Contini fractions).
+double head_depth_from_height(const std::array<std::array<double, 3>, 13>& joints_at_unit_depth, double height_mm);
+
+// CSV: t_us, then x,y,z (mm) of the 13 joints in SPEC order, confidence, mask_ran.
+std::string pose_csv_header();
+std::string pose_csv_row(const Pose& p);
+
+}  // namespace yelan::run

@@ -1,0 +1,86 @@
+// `yelan run` end to end on a simulated recording: CSV columns, early exit, stale ticks,
+// a truncated file, bad arguments.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cli_util.h"
+#include "engine/run/pipeline.h"
+
+namespace {
+using yelan::test::contains;
+using yelan::test::run_cli;
+using yelan::test::slurp;
+
+std::vector<std::vector<std::string>> csv_rows(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> cols;
+    std::istringstream l(line);
+    for (std::string c; std::getline(l, c, ',');) cols.push_back(c);
+    rows.push_back(cols);
+  }
+  return rows;
+}
+}  // namespace
+
+TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction", "[run][cli]") {
+  yelan::test::CliTempDir d("run");
+  REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.3s", "-o", d / "r.yelan.h5"}).code == 0);
+  const auto r = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--rate", "50", "--out", d / "p.csv",
+                          "--no-early-exit", "--stats-json", d / "s.json"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  const auto rows = csv_rows(slurp(d / "p.csv"));
+  REQUIRE(rows.size() >= 14);  // header + one pose per 20 ms tick of 0.3 s
+  CHECK(rows[0].size() == 1 + 39 + 2);
+  CHECK(rows[0][0] == "t_us");
+  CHECK(rows[0][1] == "head_x");
+  CHECK(rows[0][41] == "mask_ran");
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    REQUIRE(rows[i].size() == 42);
+    CHECK(rows[i][41] == "1");  // no early exit: stage 1 at every tick
+    if (i > 1) CHECK(std::stoll(rows[i][0]) - std::stoll(rows[i - 1][0]) == 20000);
+  }
+  CHECK(contains(slurp(d / "s.json"), "\"mask_run_fraction\": 1"));
+  // beta 0: every stored future mask is good enough; stage 1 runs once per n_masks (3) ticks.
+  const auto e = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--beta", "0", "--out", d / "e.csv"});
+  REQUIRE(e.code == 0);
+  const auto er = csv_rows(slurp(d / "e.csv"));
+  int ran = 0;
+  for (std::size_t i = 1; i < er.size(); ++i) ran += er[i][41] == "1";
+  CHECK(ran == int((er.size() - 1 + 2) / 3));
+  // JSON and HDF5 outputs; a bad extension is refused before any work.
+  CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.json"}).code == 0);
+  CHECK(contains(slurp(d / "p.json"), "\"joints_mm\""));
+  CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.h5"}).code == 0);
+  CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.txt"}).code == 2);
+  CHECK(run_cli({"run", "--weights", d / "w.h5"}).code == 2);
+}
+
+TEST_CASE("run: a file ending mid-packet stops cleanly and keeps the poses computed", "[run][cli]") {
+  yelan::test::CliTempDir d("run-trunc");
+  REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.3s", "-o", d / "r.yelan.h5"}).code == 0);
+  REQUIRE(run_cli({"convert", d / "r.yelan.h5", d / "r.aedat4"}).code == 0);
+  const std::string full = slurp(d / "r.aedat4");
+  std::ofstream(d / "cut.aedat4", std::ios::binary) << full.substr(0, full.size() * 2 / 3);
+  const auto r = run_cli({"run", "--weights", d / "w.h5", d / "cut.aedat4", "--out", d / "p.csv"});
+  CHECK(r.code == 2);
+  CHECK(contains(r.err, "poses computed before are written"));
+  CHECK(std::filesystem::exists(d / "p.csv"));
+}
+
+TEST_CASE("run: the depth prior scales a unit-depth skeleton to the body height", "[run]") {
+  // A skeleton at unit depth whose 8 limb bones are each 0.1 long: the prior's limb sum for
+  // 1700 mm is 2 x (0.186 + 0.146 + 0.245 + 0.246) x 1700 = 2798.2 mm, so depth = 2798.2 / 0.8.
+  std::array<std::array<double, 3>, 13> unit{};
+  const int chain[][3] = {{1, 3, 7}, {2, 4, 8}, {5, 9, 11}, {6, 10, 12}};
+  for (int c = 0; c < 4; ++c)
+    for (int k = 0; k < 3; ++k) unit[std::size_t(chain[c][k])] = {double(c), 0.1 * k, 1};
+  CHECK(yelan::run::head_depth_from_height(unit, 1700) == Approx(2 * 0.823 * 1700 / 0.8));
+}
