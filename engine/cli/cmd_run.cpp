@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
 #include "camera/io/event_reader.h"
@@ -14,6 +15,7 @@
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
 #include "engine/run/pipeline.h"
+#include "engine/run/viz.h"
 #include "engine/threads.h"
 
 namespace yelan::cli {
@@ -79,7 +81,8 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
 }  // namespace
 
 int cmd_run(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  const Args a("run", argv, {"--weights", "--rate", "--out", "--beta", "--height-mm", "--depth-mm", "--threads", "--stats-json"},
+  const Args a("run", argv, {"--weights", "--rate", "--out", "--beta", "--height-mm", "--depth-mm", "--threads", "--stats-json", "--viz",
+                "--viz-every"},
                {"--camera", "--no-early-exit", "--keep-empty"});
   a.expect_positionals(0, 1);
   const auto w = a.value("--weights");
@@ -107,7 +110,12 @@ int cmd_run(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
   const auto& info = reader->info();
   run::PosePipeline pipe(*w, info.width, info.height, opt);
   std::vector<run::Pose> poses;
-  auto sink = [&](const run::Pose& p) { poses.push_back(p); };
+  std::optional<run::RunViz> viz;
+  if (const auto v = a.value("--viz")) viz.emplace(*v, info.width, info.height, a.int_value_or("--viz-every", 1, 1, 1 << 20));
+  auto sink = [&](const run::Pose& p) {
+    poses.push_back(p);
+    if (viz) viz->add(p, pipe);
+  };
   std::vector<camera::Event> ev;
   std::int64_t last_t = 0;
   std::string stopped;
@@ -124,6 +132,7 @@ int cmd_run(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
   pipe.finish(last_t, sink);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (const auto o = a.value("--out")) write_poses(*o, poses);
+  if (viz) err << viz->finish() << " pictures in " << *a.value("--viz") << "\n";
   const run::RunStats& s = pipe.stats();
   const double frac = s.ticks ? double(s.mask_runs) / double(s.ticks - s.stale + 1e-9) : 0;
   out << in << ": " << s.events << " events, " << s.poses << " poses at " << opt.rate_hz << " per second ("

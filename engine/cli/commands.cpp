@@ -9,14 +9,16 @@ const std::vector<Command>& commands() {
       {"run", "events -> 3D poses, live or from a file",
        "usage: yelan run --weights W FILE [--rate 50] [--out poses.csv|.json|.h5] [--beta 0.99]\n"
        "                 [--no-early-exit] [--height-mm 1700 | --depth-mm Z] [--keep-empty]\n"
-       "                 [--threads T] [--stats-json S.json]\n"
+       "                 [--threads T] [--stats-json S.json] [--viz DIR [--viz-every N]]\n"
        "Per event the TORE volume; at each tick (--rate per second) stage 1 with early exit (the\n"
        "U-Net runs only when the stored future mask's score is below beta), the masked TORE\n"
        "through stage 2 (causal or windowed bidirectional, as the model's config says), and 13\n"
        "joints in mm in the camera frame, denormalised with a body-height prior for the depth\n"
        "(or a fixed --depth-mm). Ticks without events repeat the last pose (causal models).\n"
        "CSV columns: t_us, x,y,z of the 13 joints in SPEC order, confidence, mask_ran.\n"
-       "A file that ends mid-packet stops the run with a message; every pose computed is written.\n",
+       "A file that ends mid-packet stops the run with a message; every pose computed is written.\n"
+       "--viz DIR: a PNG per pose (TORE and mask, projected skeleton, side view); DIR/run.mp4\n"
+       "when ffmpeg is installed.\n",
        cmd_run, "streaming pose estimation (issue 8)"},
       {"sim", "simulate a dancer seen by an event camera, with labels",
        "usage: yelan sim --preset NAME|--config scene.json [--seed N] [--duration 2s] -o OUT.yelan.h5\n"

@@ -55,6 +55,7 @@ struct PosePipeline::Impl {
   std::int64_t mask_t = 0;
   std::vector<std::vector<float>> masks;  // N binarised masks, H x W
   std::vector<float> scores;
+  int in_use = 0;
   // stage 2
   int slot = 0;
   std::vector<std::int64_t> slot_t;
@@ -159,6 +160,7 @@ struct PosePipeline::Impl {
     const layers::Act& dst = cfg.bidirectional ? window.act : frame.act;
     const int n = cfg.bidirectional ? slot : 0;
     const std::size_t plane = unmasked.act.pixels() * 16, per_frame = std::size_t(unmasked.act.cb()) * plane;
+    in_use = use;
     const std::vector<float>& keep = masks[std::size_t(use)];
     for (int cb = 0; cb < unmasked.act.cb(); ++cb)
       for (std::size_t i = 0; i < unmasked.act.pixels(); ++i)
@@ -224,6 +226,13 @@ void PosePipeline::finish(std::int64_t t_us, const std::function<void(const Pose
 
 const RunStats& PosePipeline::stats() const { return impl_->stats; }
 std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
+const std::vector<float>& PosePipeline::last_tore() const { return impl_->vol; }
+const std::vector<float>& PosePipeline::last_mask() const {
+  static const std::vector<float> none;
+  return impl_->masks.empty() ? none : impl_->masks[std::size_t(std::max(0, impl_->in_use))];
+}
+int PosePipeline::mask_downscale() const { return impl_->nets.cfg.downscale; }
+double PosePipeline::focal_px() const { return kFocalPx; }
 bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }
 
 std::string pose_csv_header() {

@@ -55,6 +55,12 @@ class PosePipeline {
   const RunStats& stats() const;
   std::string config_name() const;
   bool causal() const;
+  // For pictures, valid inside the pose callback: the TORE volume of the latest tick (2K x
+  // H x W at the sensor's size), the mask in use (the model's input size) and its downscale.
+  const std::vector<float>& last_tore() const;
+  const std::vector<float>& last_mask() const;
+  int mask_downscale() const;
+  double focal_px() const;
 
  private:
   struct Impl;

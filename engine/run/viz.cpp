@@ -1,0 +1,69 @@
+#include "engine/run/viz.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+
+#include "camera/repr/preview_png.h"
+#include "camera/sim/preview.h"
+
+namespace yelan::run {
+
+RunViz::RunViz(const std::string& dir, int w, int h, int every) : dir_(dir), w_(w), h_(h), every_(std::max(1, every)) {
+  std::filesystem::create_directories(dir_);
+}
+
+void RunViz::add(const Pose& p, const PosePipeline& pipe) {
+  if (seen_++ % every_) return;
+  const int W = 3 * w_;
+  std::vector<std::uint8_t> rgb(std::size_t(W) * h_ * 3, 0), panel(std::size_t(w_) * h_ * 3, 0);
+  const std::vector<float>& tore = pipe.last_tore();
+  const std::vector<float>& mask = pipe.last_mask();
+  const int d = pipe.mask_downscale(), mw = w_ / d, mh = h_ / d;
+  const std::size_t plane = std::size_t(w_) * h_;
+  for (int y = 0; y < h_; ++y)
+    for (int x = 0; x < w_; ++x) {
+      const std::size_t i = std::size_t(y) * w_ + x;
+      const float on = tore.size() >= 6 * plane ? tore[i] : 0.f, off = tore.size() >= 6 * plane ? tore[3 * plane + i] : 0.f;
+      const bool m = !mask.empty() && x / d < mw && y / d < mh && mask[std::size_t(y / d) * mw + x / d] > 0;
+      std::uint8_t* q = &panel[i * 3];
+      q[0] = std::uint8_t(std::lround(255 * on));
+      q[1] = m ? 60 : 0;
+      q[2] = std::uint8_t(std::lround(255 * off));
+    }
+  camera::sim::CameraModel cam;
+  cam.width = w_, cam.height = h_, cam.fx = cam.fy = pipe.focal_px(), cam.cx = w_ / 2.0, cam.cy = h_ / 2.0;
+  camera::sim::Label l;
+  for (int j = 0; j < 13; ++j) l.joints_mm[j] = {p.joints_mm[j][0], p.joints_mm[j][1], p.joints_mm[j][2]};
+  std::vector<std::uint8_t> skel = panel;
+  camera::sim::draw_skeleton(skel, w_, h_, cam, l);
+  // Side view: depth (z) across, height (y) down, centred on the hips, 10 mm per pixel.
+  std::vector<std::uint8_t> side(std::size_t(w_) * h_ * 3, 24);
+  camera::sim::Label s = l;
+  const double zc = (p.joints_mm[5][2] + p.joints_mm[6][2]) / 2, yc = (p.joints_mm[5][1] + p.joints_mm[6][1]) / 2;
+  for (int j = 0; j < 13; ++j) s.joints_mm[j] = {(p.joints_mm[j][2] - zc) / 10.0, (p.joints_mm[j][1] - yc) / 10.0, 1.0};
+  camera::sim::CameraModel ortho = cam;
+  ortho.fx = ortho.fy = 1;
+  camera::sim::draw_skeleton(side, w_, h_, ortho, s);
+  for (int y = 0; y < h_; ++y) {
+    std::copy_n(&panel[std::size_t(y) * w_ * 3], w_ * 3, &rgb[std::size_t(y) * W * 3]);
+    std::copy_n(&skel[std::size_t(y) * w_ * 3], w_ * 3, &rgb[(std::size_t(y) * W + w_) * 3]);
+    std::copy_n(&side[std::size_t(y) * w_ * 3], w_ * 3, &rgb[(std::size_t(y) * W + 2 * w_) * 3]);
+  }
+  char name[64];
+  std::snprintf(name, sizeof name, "pose_%06d.png", written_);
+  camera::write_png_rgb((std::filesystem::path(dir_) / name).string(), W, h_, rgb);
+  ++written_;
+}
+
+int RunViz::finish() {
+  if (written_ > 0 && std::system("command -v ffmpeg >/dev/null 2>&1") == 0) {
+    const std::string cmd = "ffmpeg -loglevel error -y -framerate 25 -i '" + dir_ + "/pose_%06d.png' -pix_fmt yuv420p '" +
+                            dir_ + "/run.mp4'";
+    if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "yelan: ffmpeg could not make %s/run.mp4\n", dir_.c_str());
+  }
+  return written_;
+}
+
+}  // namespace yelan::run
