@@ -99,12 +99,13 @@ const std::vector<Command>& commands() {
        "usage: yelan devices\n"
        "Lists attached DAVIS346/DVXplorer cameras: model, USB bus, address, serial.\n",
        cmd_devices, "the libusb driver (issue 5)"},
-      {"bench", "benchmarks: kernels, events, networks, sim",
+      {"bench", "benchmarks: kernels, events, networks, sim, run",
        "usage: yelan bench kernels [--quick] [--json] [--isa-list avx2,avx512] [--threads-list 1,2]\n"
        "                          [--reps N] [--only NAME] [--chart FILE.svg] [--from RESULTS.json]\n"
        "       yelan bench events [--json]\n"
        "       yelan bench networks [--configs paper,small,tiny] [--threads-list 1,2] [--window W] [--json]\n"
        "       yelan bench sim [--duration 2] [--threads-list 1,2] [--character ben] [--motion 05_04] [--json]\n"
+       "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta 0.99] [--weights W] [--json]\n"
        "\n"
        "kernels: every convolution shape of the networks (forward, backward-data,\n"
        "backward-weights) per ISA and thread count, with GFLOP/s and % of the FMA peak\n"
@@ -115,7 +116,9 @@ const std::vector<Command>& commands() {
        "contains NAME ('memory', 'convlstm.step' for those groups). --from: re-print the\n"
        "table (and --chart) of a saved --json run without measuring.\n"
        "sim: simulated seconds per wall second for each lighting x background, the shares\n"
-       "of rendering and the pixel model, and events/s against the real DAVIS346 recording.\n",
+       "of rendering and the pixel model, and events/s against the real DAVIS346 recording.\n"
+       "run: the streaming pipeline per config and thread count: poses/s, per-tick p50/p99 split\n"
+       "by stage (TORE, stage 1, stage 2) and the share of ticks that ran stage 1.\n",
        cmd_bench, ""},
       {"model", "network summaries and forward passes",
        "usage: yelan model summary --config NAME|FILE [--json]\n"

@@ -1,0 +1,136 @@
+#include "benchmarks/run/bench_run.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <unistd.h>
+
+#include "camera/sim/presets.h"
+#include "engine/cli/args.h"
+#include "engine/mask_net.h"
+#include "engine/pose_net.h"
+#include "engine/run/pipeline.h"
+#include "engine/threads.h"
+#include "weights_tools/network_io.h"
+
+namespace yelan::bench {
+namespace {
+
+struct Collect final : camera::sim::SimSink {
+  std::vector<camera::Event> ev;
+  void events(std::span<const camera::Event> e) override { ev.insert(ev.end(), e.begin(), e.end()); }
+};
+
+std::vector<std::string> split(const std::string& s) {
+  std::vector<std::string> out;
+  std::istringstream in(s);
+  for (std::string p; std::getline(in, p, ',');)
+    if (!p.empty()) out.push_back(p);
+  return out;
+}
+
+double pct(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
+}
+
+std::string random_weights(const std::string& config, const std::string& dir) {
+  const ModelConfig cfg = load_model_config(config);
+  MaskNet mask(cfg);
+  PoseNet pose(cfg);
+  mask.init(11);
+  pose.init(12);
+  layers::ParamList mp, pp;
+  mask.params(mp);
+  pose.params(pp);
+  weights::randomise_batchnorm(mp, 13);
+  weights::randomise_batchnorm(pp, 14);
+  weights::Weights w;
+  w.config_json = cfg.json;
+  w.groups["mask"] = weights::group_of(mp);
+  w.groups["pose"] = weights::group_of(pp);
+  const std::string path = (std::filesystem::path(dir) / (cfg.name + ".h5")).string();
+  weights::save_weights(path, w);
+  return path;
+}
+
+}  // namespace
+
+int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights"}, {"--json"});
+  args.expect_positionals(0, 0);
+  const double rate = std::stod(args.value_or("--rate", "50")), seconds = std::stod(args.value_or("--seconds", "2"));
+  const double beta = std::stod(args.value_or("--beta", "0.99"));
+  std::vector<int> threads;
+  for (const auto& t : split(args.value_or("--threads-list", "1,2"))) {
+    auto n = parse_thread_count(t);
+    if (!n) throw cli::UsageError("--threads-list: '" + t + "' is not a thread count");
+    threads.push_back(*n);
+  }
+  // The events: a dancer simulated in memory.
+  camera::sim::SimSpec spec = camera::sim::preset_spec("ben-dance5-front-medium-static");
+  spec.duration_s = seconds;
+  camera::sim::Simulator sim(spec);
+  Collect c;
+  sim.run_until(seconds, c);
+  err << "  " << c.ev.size() << " simulated events over " << seconds << " s\n";
+  const std::string dir = (std::filesystem::temp_directory_path() / ("yelan-bench-run-" + std::to_string(::getpid()))).string();
+  std::filesystem::create_directories(dir);
+  std::vector<std::pair<std::string, std::string>> models;  // config, weights
+  if (const auto w = args.value("--weights")) models.push_back({"", *w});
+  else
+    for (const auto& cfg : split(args.value_or("--configs", "small,paper"))) models.push_back({cfg, random_weights(cfg, dir)});
+  struct Row {
+    std::string config;
+    int threads;
+    double poses_per_s, p50, p99, tore50, s1_50, s2_50, mask_frac;
+  };
+  std::vector<Row> rows;
+  const int saved = yelan::threads();
+  for (const auto& [cfg, wpath] : models)
+    for (int t : threads) {
+      set_threads(t);
+      run::RunOptions o;
+      o.rate_hz = rate;
+      o.beta = beta;
+      run::PosePipeline pipe(wpath, 346, 260, o);
+      std::uint64_t n = 0;
+      const auto t0 = std::chrono::steady_clock::now();
+      pipe.push(c.ev, [&](const run::Pose&) { ++n; });
+      pipe.finish(c.ev.empty() ? 0 : c.ev.back().t, [&](const run::Pose&) { ++n; });
+      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const auto& s = pipe.stats();
+      rows.push_back({pipe.config_name(), t, double(n) / wall, pct(s.times.tick_ms, 0.5), pct(s.times.tick_ms, 0.99),
+                      pct(s.times.tore_ms, 0.5), pct(s.times.stage1_ms, 0.5), pct(s.times.stage2_ms, 0.5),
+                      double(s.mask_runs) / double(std::max<std::uint64_t>(1, s.ticks - s.stale))});
+      err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s\n";
+    }
+  set_threads(saved);
+  std::filesystem::remove_all(dir);
+  if (args.flag("--json")) {
+    out << "[\n";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const Row& r = rows[i];
+      out << "  {\"config\": \"" << r.config << "\", \"threads\": " << r.threads << ", \"poses_per_s\": " << r.poses_per_s
+          << ", \"p50_ms\": " << r.p50 << ", \"p99_ms\": " << r.p99 << ", \"tore_p50_ms\": " << r.tore50
+          << ", \"stage1_p50_ms\": " << r.s1_50 << ", \"stage2_p50_ms\": " << r.s2_50
+          << ", \"mask_run_fraction\": " << r.mask_frac << ", \"rate\": " << rate << "}" << (i + 1 < rows.size() ? "," : "")
+          << "\n";
+    }
+    out << "]\n";
+    return 0;
+  }
+  out << "config   threads  poses/s  tick p50 ms  p99 ms  TORE p50  stage1 p50  stage2 p50  stage 1 ran\n";
+  for (const Row& r : rows) {
+    char line[256];
+    std::snprintf(line, sizeof line, "%-8s %7d %8.1f %12.2f %7.2f %9.2f %11.2f %11.2f %10.0f%%\n", r.config.c_str(), r.threads,
+                  r.poses_per_s, r.p50, r.p99, r.tore50, r.s1_50, r.s2_50, 100 * r.mask_frac);
+    out << line;
+  }
+  return 0;
+}
+
+}  // namespace yelan::bench
