@@ -96,6 +96,12 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   for (const char* f : {"checkpoint.h5", "checkpoint.state", "best.h5", "final.h5"})
     CHECK(std::filesystem::exists(d / (std::string("a/") + f)));
   CHECK(yelan::test::slurp(d / "a/final.h5") == yelan::test::slurp(d / "b/final.h5"));
+  // Stages trained apart combine into one model file.
+  const auto comb = yelan::test::run_cli({"weights", "combine", "--mask", d / "b/final.h5", "--pose", d / "a/final.h5", "-o",
+                                          d / "both.h5"});
+  INFO(comb.err);
+  CHECK(comb.code == 0);
+  CHECK(yelan::test::run_cli({"weights", "combine", "--mask", d / "b/final.h5", "-o", d / "x.h5"}).code == 2);
   // The trained weights evaluate on held-out test scenes; the JSON has the contract's keys.
   const auto ev = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--sim", "test", "--scenes", "2", "--seconds",
                                         "0.04", "--seed", "3", "--json", d / "eval.json"});

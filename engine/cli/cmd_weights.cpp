@@ -202,6 +202,22 @@ int verify(const Args& args, std::ostream& out, std::ostream& err) {
   return kOk;
 }
 
+// The mask group of one file and the pose group of another (trained in separate stages)
+// into one model file; both must hold the same config.
+int combine(const Args& a, std::ostream& out) {
+  a.expect_positionals(0, 0);
+  const auto m = a.value("--mask"), p = a.value("--pose"), o = a.value("-o");
+  if (!m || !p || !o) throw UsageError("weights combine needs --mask A.h5 --pose B.h5 -o OUT.h5");
+  const weights::Weights wm = weights::load_weights(*m), wp = weights::load_weights(*p);
+  if (wm.config_json != wp.config_json)
+    throw UsageError("weights combine: " + *m + " and " + *p + " hold different configs");
+  weights::Weights w = wp;
+  w.groups["mask"] = wm.groups.at("mask");
+  weights::save_weights(*o, w);
+  out << "wrote " << *o << ": mask from " << *m << ", pose from " << *p << "\n";
+  return kOk;
+}
+
 }  // namespace
 
 int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
@@ -213,6 +229,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "diff") return diff(Args("weights diff", rest, {"--tol"}, {"--all"}), out);
     if (sub == "verify") return verify(Args("weights verify", rest, {"--config"}, {}), out, err);
     if (sub == "init") return weights_init(rest, out);
+    if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o"}, {}), out);
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
     for (std::string line; std::getline(lines, line);) err << "yelan: error: " << line << "\n";
@@ -221,7 +238,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     err << "yelan: error: config JSON: " << e.what() << "\n";
     return kUsageError;
   }
-  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init)");
+  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine)");
 }
 
 }  // namespace yelan::cli
