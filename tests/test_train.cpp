@@ -3,6 +3,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "cli_util.h"
@@ -73,6 +75,7 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   INFO(whole.err);
   REQUIRE(whole.code == 0);
   REQUIRE(run("b", "2", {"--threads", "2"}).code == 0);
+  std::ofstream(d / "b/log.csv", std::ios::app) << "3,1,0.12";  // a row cut short by a crash
   const auto resumed = run("b", "4", {"--resume", "--threads", "2"});
   INFO(resumed.err);
   REQUIRE(resumed.code == 0);
@@ -112,6 +115,11 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   for (const char* key : {"\"mpjpe_mm\"", "\"pck150\"", "\"auc\"", "\"mpjpe_root_mm\"", "\"frames\": 4", "\"by_condition\"",
                           "\"lighting\"", "\"mask_iou\""})
     CHECK(yelan::test::contains(js, key));
+  // Weights and state from different steps (a stop between the two writes) are refused.
+  std::filesystem::copy_file(d / "a/best.h5", d / "b/checkpoint.h5", std::filesystem::copy_options::overwrite_existing);
+  const auto mixed = run("b", "6", {"--resume"});
+  CHECK(mixed.code != 0);
+  CHECK(yelan::test::contains(mixed.err, "does not belong to"));
   // Nothing to resume from, a bad stage, a missing option: clear errors.
   CHECK(run("none", "2", {"--resume"}).code != 0);
   CHECK(yelan::test::run_cli({"train", "--stage", "legs", "--config", "micro", "--sim", "train", "-o", d / "x"}).code == 2);

@@ -120,14 +120,18 @@ int cmd_run(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
   std::int64_t last_t = 0;
   std::string stopped;
   const auto start = std::chrono::steady_clock::now();
-  try {
-    while (reader->read(ev, 1 << 15) > 0) {
+  for (;;) {
+    try {
+      if (reader->read(ev, 1 << 15) == 0) break;
+    } catch (const std::exception& e) {
+      stopped = e.what();  // a file ending mid-packet: keep every pose computed so far
+    }
+    if (!ev.empty()) {
       last_t = ev.back().t;
       pipe.push(ev, sink);
       ev.clear();
     }
-  } catch (const std::exception& e) {
-    stopped = e.what();  // a file ending mid-packet: keep every pose computed so far
+    if (!stopped.empty()) break;
   }
   pipe.finish(last_t, sink);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

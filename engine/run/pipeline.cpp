@@ -196,6 +196,15 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
       m.started = true;
       m.next_tick = e.t + m.dt_us;
     }
+    // A gap of more than 2 s (a paused recording): skip to the tick before this event,
+    // starting a fresh window and mask, instead of running the networks on empty ticks.
+    if (e.t - m.next_tick > 2'000'000) {
+      const std::int64_t skip = (e.t - m.next_tick) / m.dt_us;
+      m.next_tick += skip * m.dt_us;
+      m.stats.gap_ticks += std::uint64_t(skip);
+      m.slot = 0;
+      m.have_masks = false;
+    }
     while (e.t > m.next_tick) {
       m.tick(m.next_tick, out);
       m.next_tick += m.dt_us;

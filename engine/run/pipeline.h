@@ -41,6 +41,7 @@ struct StageTimes {
 
 struct RunStats {
   std::uint64_t ticks = 0, mask_runs = 0, stale = 0, events = 0, poses = 0;
+  std::uint64_t gap_ticks = 0;  // skipped over gaps of more than 2 s without events
   StageTimes times;
 };
 

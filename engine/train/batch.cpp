@@ -15,6 +15,9 @@ void OwnedAct::resize(int n, int c, int h, int w) {
 
 BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source)
     : cfg_(cfg), windows_(windows), source_(source) {
+  if (cfg.channels != 6)
+    throw std::invalid_argument("config " + cfg.name + ": " + std::to_string(cfg.channels) +
+                                " input channels, but TORE with K = 3 gives 6");
   const int n = windows * cfg.window, h = cfg.height(), w = cfg.width();
   b_.input.resize(n, cfg.channels, h, w);
   if (source == MaskSource::none) b_.labels.resize(n, cfg.n_masks, h, w);
@@ -29,6 +32,10 @@ BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource sourc
 
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
   const int C = a.c, H = a.h, W = a.w;
+  if (vol.size() != std::size_t(C) * sensor_h * sensor_w || std::size_t(H) * d > std::size_t(sensor_h) ||
+      std::size_t(W) * d > std::size_t(sensor_w))
+    throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values does not fill " +
+                                std::to_string(C) + " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
   const float inv = 1.f / float(d * d);
   for (int c = 0; c < C; ++c) {
     float* out = a.data + (std::size_t(n) * a.cb() + c / 16) * a.pixels() * 16 + c % 16;

@@ -40,9 +40,11 @@ void PoseMetrics::add(const Pose13& pred, const Pose13& truth, const std::array<
     any = true;
     const double d = norm3(pred[j], truth[j]);
     dist_.push_back(d);
-    std::array<double, 3> a, b;
-    for (int k = 0; k < 3; ++k) a[k] = pred[j][k] - rp[k], b[k] = truth[j][k] - rt[k];
-    dist_root_.push_back(norm3(a, b));
+    if (valid[5] && valid[6]) {  // the hip centre needs both hips
+      std::array<double, 3> a, b;
+      for (int k = 0; k < 3; ++k) a[k] = pred[j][k] - rp[k], b[k] = truth[j][k] - rt[k];
+      dist_root_.push_back(norm3(a, b));
+    }
     joint_sum_[j] += d;
     ++joint_n_[j];
   }

@@ -1,5 +1,6 @@
 #include "engine/train/trainer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -28,9 +29,10 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr char kStateMagic[8] = {'Y', 'E', 'L', 'A', 'N', 'T', 'R', 'N'};
-constexpr std::uint32_t kStateVersion = 1;
+constexpr std::uint32_t kStateVersion = 2;
 
 struct State {
+  std::uint64_t weights_hash = 0;  // of checkpoint.h5: the pair must belong together
   std::int64_t step = 0;
   std::int64_t adam_t = 0;
   std::int32_t adam_epochs = 0;
@@ -54,6 +56,7 @@ void save_state(const std::string& path, const State& s) {
     std::ofstream o(tmp.path(), std::ios::binary);
     o.write(kStateMagic, 8);
     put(o, kStateVersion);
+    put(o, s.weights_hash);
     put(o, s.step), put(o, s.adam_t), put(o, s.adam_epochs), put(o, s.lr), put(o, s.best_val), put(o, s.bad_epochs);
     const std::uint64_t n = s.moments.size();
     put(o, n);
@@ -74,6 +77,7 @@ State load_state(const std::string& path, std::size_t expect_moments) {
   get(in, version, path);
   if (version != kStateVersion) throw std::runtime_error(path + ": trainer state version " + std::to_string(version));
   State s;
+  get(in, s.weights_hash, path);
   get(in, s.step, path), get(in, s.adam_t, path), get(in, s.adam_epochs, path), get(in, s.lr, path);
   get(in, s.best_val, path), get(in, s.bad_epochs, path);
   std::uint64_t n;
@@ -87,15 +91,34 @@ State load_state(const std::string& path, std::size_t expect_moments) {
   return s;
 }
 
+// FNV-1a of a file's bytes.
+std::uint64_t file_hash(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::uint64_t h = 1469598103934665603ull;
+  char buf[1 << 16];
+  while (in.read(buf, sizeof buf) || in.gcount() > 0) {
+    for (std::streamsize i = 0; i < in.gcount(); ++i) h = (h ^ static_cast<unsigned char>(buf[i])) * 1099511628211ull;
+    if (!in) break;
+  }
+  return h;
+}
+
 // The log up to (and including) `step`: a resumed run rewrites what came after the checkpoint.
 void truncate_log(const std::string& path, std::int64_t step) {
+  static const std::string header = "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s";
   std::ifstream in(path);
-  std::string line, kept;
-  bool header = true;
+  std::string line, kept = header + "\n";
   while (std::getline(in, line)) {
-    if (!header && std::stoll(line.substr(0, line.find(','))) > step) break;
+    // Only whole rows at or before the checkpoint (a crash can cut the last one short).
+    if (line == header || std::count(line.begin(), line.end(), ',') != 7) continue;
+    std::int64_t at = 0;
+    try {
+      at = std::stoll(line.substr(0, line.find(',')));
+    } catch (const std::exception&) {
+      continue;
+    }
+    if (at > step) break;
     kept += line + "\n";
-    header = false;
   }
   in.close();
   camera::TempFile tmp(path);
@@ -130,6 +153,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.batch < 1 || spec.steps < 1 || spec.steps_per_epoch < 1)
     throw std::invalid_argument("batch, steps and steps per epoch must be >= 1");
   fs::create_directories(spec.out_dir);
+  if (pose_stage && spec.mask_weights.empty() && spec.init_weights.empty())
+    err << "note: the pose net learns from the simulator's true masks; the mask group of the files written here is "
+           "untrained (combine with a trained mask net: yelan weights combine; evaluate alone with --true-mask)\n";
   const std::string ckpt = (fs::path(spec.out_dir) / "checkpoint.h5").string();
   const std::string state_path = (fs::path(spec.out_dir) / "checkpoint.state").string();
   const std::string log_path = (fs::path(spec.out_dir) / "log.csv").string();
@@ -161,6 +187,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     mask.weights_changed();
     pose.weights_changed();
     st = load_state(state_path, adam.moments().size());
+    if (st.weights_hash != file_hash(ckpt))
+      throw std::runtime_error(state_path + " does not belong to " + ckpt +
+                               " (a run stopped between writing the two): cannot resume exactly");
     adam.set_state(st.moments, st.adam_t, st.adam_epochs, st.lr);
     truncate_log(log_path, st.step);
     err << "resuming " << spec.out_dir << " at step " << st.step << "\n";
@@ -184,8 +213,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   std::ofstream log(log_path, std::ios::app);
   auto last_ckpt = std::chrono::steady_clock::now();
   const auto start = last_ckpt;
+  // Weights first, then the state with the weights' checksum: a stop between the two is
+  // detected on --resume instead of mixing two steps.
   auto checkpoint = [&] {
     weights::save_weights(ckpt, snapshot(cfg, mp, pp));
+    st.weights_hash = file_hash(ckpt);
     st.adam_t = adam.steps();
     st.adam_epochs = adam.epochs();
     st.lr = adam.lr();
@@ -227,7 +259,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   pose.set_training(pose_stage);
   TrainResult result;
   double loss = 0, grad_norm = 0;
-  while (st.step < spec.steps) {
+  if (st.bad_epochs >= spec.patience) {
+    result.early_stopped = true;
+    err << "this run had already stopped early (no better validation loss for " << spec.patience << " epochs)\n";
+  }
+  const std::int64_t first_step = st.step;
+  while (st.step < spec.steps && !result.early_stopped) {
     const auto t0 = std::chrono::steady_clock::now();
     builder.clear();
     for (int b = 0; b < spec.batch; ++b) {
@@ -252,11 +289,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       loss = mask_loss(mask, batch.labels.act, dmasks, dscores).total;
       mask.backward(batch.input.act, dmasks, dscores.data());
     }
-    if (!std::isfinite(loss)) {
-      checkpoint();
+    if (!std::isfinite(loss))  // the last checkpoint stays as it was: this step's BN statistics may be NaN
       throw std::runtime_error("loss is " + std::to_string(loss) + " at step " + std::to_string(st.step) +
-                               " (checkpoint of the step before written)");
-    }
+                               "; the last checkpoint is kept");
     grad_norm = adam.step();
     (pose_stage ? static_cast<void>(pose.weights_changed()) : mask.weights_changed());
     ++st.step;
@@ -279,7 +314,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     log << st.step << "," << adam.epochs() << "," << std::setprecision(9) << loss << "," << val << "," << adam.lr() << ","
         << grad_norm << "," << std::setprecision(4) << sps << "," << wall << "\n";
     log.flush();
-    const double eta = wall / double(st.step - (spec.resume ? 0 : 0) + 1e-9) * double(spec.steps - st.step);
+    const double eta = wall / double(st.step - first_step) * double(spec.steps - st.step);
     if (spec.progress_tty)
       err << "\rstep " << st.step << "/" << spec.steps << "  epoch " << adam.epochs() << "  loss " << std::fixed
           << std::setprecision(4) << loss << "  lr " << std::scientific << std::setprecision(1) << adam.lr()
