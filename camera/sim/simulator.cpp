@@ -196,7 +196,9 @@ void Simulator::run_until(double t_end_s, SimSink& sink) {
     // edges at most step_lambda px (a pixel's log intensity by that fraction of the edge's
     // contrast), a keyframe at most render_lambda px; flicker, which interpolation between
     // keyframes would miss, bounds both to step_lambda thresholds of log change.
-    const double speed = image_speed(prev_pose_, pose_, step);
+    // Capped at 3000 px/s (a hand at 15 m/s, 2.5 m away): motion capture glitches (a toe
+    // flipping within one frame, in 05_16 and 05_19) must not drive sampling to its floor.
+    const double speed = std::min(image_speed(prev_pose_, pose_, step), 3000.0);
     double want_pixel = speed > 1e-6 ? spec_.step_lambda / speed : spec_.max_step_s;
     double want_render = speed > 1e-6 ? spec_.render_lambda / speed : spec_.max_render_step_s;
     if (spec_.scene.flicker) {
