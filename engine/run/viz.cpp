@@ -42,9 +42,9 @@ void RunViz::add(const Pose& p, const PosePipeline& pipe) {
   std::vector<std::uint8_t> side(std::size_t(w_) * h_ * 3, 24);
   camera::sim::Label s = l;
   const double zc = (p.joints_mm[5][2] + p.joints_mm[6][2]) / 2, yc = (p.joints_mm[5][1] + p.joints_mm[6][1]) / 2;
-  for (int j = 0; j < 13; ++j) s.joints_mm[j] = {(p.joints_mm[j][2] - zc) / 10.0, (p.joints_mm[j][1] - yc) / 10.0, 1.0};
+  for (int j = 0; j < 13; ++j) s.joints_mm[j] = {(p.joints_mm[j][2] - zc) / 5.0, (p.joints_mm[j][1] - yc) / 5.0, 2.0};
   camera::sim::CameraModel ortho = cam;
-  ortho.fx = ortho.fy = 1;
+  ortho.fx = ortho.fy = 1;  // with z = 2 above: 1 px per 10 mm
   camera::sim::draw_skeleton(side, w_, h_, ortho, s);
   for (int y = 0; y < h_; ++y) {
     std::copy_n(&panel[std::size_t(y) * w_ * 3], w_ * 3, &rgb[std::size_t(y) * W * 3]);
