@@ -79,6 +79,14 @@ void randomise_batchnorm(layers::ParamList& params, std::uint64_t seed) {
   }
 }
 
+Weights weights_of(const ModelConfig& cfg, const layers::ParamList& mask, const layers::ParamList& pose) {
+  Weights w;
+  w.config_json = cfg.json;
+  w.groups["mask"] = group_of(mask);
+  w.groups["pose"] = group_of(pose);
+  return w;
+}
+
 LoadedNetworks::LoadedNetworks(const Weights& w, const std::string& path)
     : cfg(parse_model_config(w.config_json, path + ": attribute config")), mask(cfg), pose(cfg) {
   mask.params(mp);

@@ -22,6 +22,9 @@ std::map<std::string, Tensor> group_of(const layers::ParamList& params);
 // num_batches_tracked U{1..9999}), so that a forward pass depends on every BN tensor.
 void randomise_batchnorm(layers::ParamList& params, std::uint64_t seed);
 
+// A weights file's content: the config and both networks' parameters.
+Weights weights_of(const ModelConfig& cfg, const layers::ParamList& mask, const layers::ParamList& pose);
+
 // Both networks built from a weights file's config and loaded with its tensors, in
 // inference mode (BN with running statistics).
 struct LoadedNetworks {

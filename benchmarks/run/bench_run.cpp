@@ -4,10 +4,10 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <sstream>
 #include <unistd.h>
 
 #include "camera/sim/presets.h"
+#include "benchmarks/bench_util.h"
 #include "engine/cli/args.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
@@ -23,20 +23,6 @@ struct Collect final : camera::sim::SimSink {
   void events(std::span<const camera::Event> e) override { ev.insert(ev.end(), e.begin(), e.end()); }
 };
 
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::istringstream in(s);
-  for (std::string p; std::getline(in, p, ',');)
-    if (!p.empty()) out.push_back(p);
-  return out;
-}
-
-double pct(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
-}
-
 std::string random_weights(const std::string& config, const std::string& dir) {
   const ModelConfig cfg = load_model_config(config);
   MaskNet mask(cfg);
@@ -48,10 +34,7 @@ std::string random_weights(const std::string& config, const std::string& dir) {
   pose.params(pp);
   weights::randomise_batchnorm(mp, 13);
   weights::randomise_batchnorm(pp, 14);
-  weights::Weights w;
-  w.config_json = cfg.json;
-  w.groups["mask"] = weights::group_of(mp);
-  w.groups["pose"] = weights::group_of(pp);
+  const weights::Weights w = weights::weights_of(cfg, mp, pp);
   const std::string path = (std::filesystem::path(dir) / (cfg.name + ".h5")).string();
   weights::save_weights(path, w);
   return path;
@@ -64,12 +47,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
   args.expect_positionals(0, 0);
   const double rate = std::stod(args.value_or("--rate", "50")), seconds = std::stod(args.value_or("--seconds", "2"));
   const double beta = std::stod(args.value_or("--beta", "0.99"));
-  std::vector<int> threads;
-  for (const auto& t : split(args.value_or("--threads-list", "1,2"))) {
-    auto n = parse_thread_count(t);
-    if (!n) throw cli::UsageError("--threads-list: '" + t + "' is not a thread count");
-    threads.push_back(*n);
-  }
+  const std::vector<int> threads = threads_list(args);
   // The events: a dancer simulated in memory.
   camera::sim::SimSpec spec = camera::sim::preset_spec("ben-dance5-front-medium-static");
   spec.duration_s = seconds;
@@ -82,7 +60,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
   std::vector<std::pair<std::string, std::string>> models;  // config, weights
   if (const auto w = args.value("--weights")) models.push_back({"", *w});
   else
-    for (const auto& cfg : split(args.value_or("--configs", "small,paper"))) models.push_back({cfg, random_weights(cfg, dir)});
+    for (const auto& cfg : cli::split_list(args.value_or("--configs", "small,paper"))) models.push_back({cfg, random_weights(cfg, dir)});
   struct Row {
     std::string config;
     int threads;
@@ -103,8 +81,8 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       pipe.finish(c.ev.empty() ? 0 : c.ev.back().t, [&](const run::Pose&) { ++n; });
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const auto& s = pipe.stats();
-      rows.push_back({pipe.config_name(), t, double(n) / wall, pct(s.times.tick_ms, 0.5), pct(s.times.tick_ms, 0.99),
-                      pct(s.times.tore_ms, 0.5), pct(s.times.stage1_ms, 0.5), pct(s.times.stage2_ms, 0.5),
+      rows.push_back({pipe.config_name(), t, double(n) / wall, run::percentile(s.times.tick_ms, 0.5), run::percentile(s.times.tick_ms, 0.99),
+                      run::percentile(s.times.tore_ms, 0.5), run::percentile(s.times.stage1_ms, 0.5), run::percentile(s.times.stage2_ms, 0.5),
                       double(s.mask_runs) / double(std::max<std::uint64_t>(1, s.ticks - s.stale))});
       err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s\n";
     }

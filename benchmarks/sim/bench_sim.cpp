@@ -3,10 +3,10 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <sstream>
 
 #include "camera/io/event_reader.h"
 #include "camera/sim/presets.h"
+#include "benchmarks/bench_util.h"
 #include "engine/cli/args.h"
 #include "engine/threads.h"
 
@@ -26,14 +26,6 @@ struct Row {
   double sim_s, wall_s, render_s, pixel_s, ev_per_s, mean_step_ms;
   std::uint64_t samples;
 };
-
-std::vector<std::string> split(const std::string& s) {
-  std::vector<std::string> out;
-  std::istringstream in(s);
-  for (std::string p; std::getline(in, p, ',');)
-    if (!p.empty()) out.push_back(p);
-  return out;
-}
 
 // Events per second of the real DAVIS346 recording (a person moving; SPEC's yardstick).
 double real_event_rate(std::string& what) {
@@ -61,12 +53,7 @@ int run_sim_bench(const std::vector<std::string>& argv, std::ostream& out, std::
   args.expect_positionals(0, 0);
   const double duration = std::stod(args.value_or("--duration", "2"));
   if (!(duration > 0 && duration < 3600)) throw cli::UsageError("--duration: seconds in (0, 3600)");
-  std::vector<int> threads;
-  for (const auto& t : split(args.value_or("--threads-list", "1,2"))) {
-    auto n = parse_thread_count(t);
-    if (!n) throw cli::UsageError("--threads-list: '" + t + "' is not a thread count");
-    threads.push_back(*n);
-  }
+  const std::vector<int> threads = threads_list(args);
   const std::string character = args.value_or("--character", "ben"), view = args.value_or("--view", "front");
   std::string motion = args.value_or("--motion", "05_04");
   if (motion != "dance" && !std::filesystem::exists(std::filesystem::path(sim::default_mocap_dir()) / (motion + ".bvh"))) {

@@ -1,5 +1,6 @@
 #include "engine/cli/args.h"
 
+#include <algorithm>
 #include <charconv>
 
 namespace yelan::cli {
@@ -69,6 +70,17 @@ void Args::expect_positionals(std::size_t min, std::size_t max) const {
   std::string want = min == max ? std::to_string(min) : std::to_string(min) + " to " + std::to_string(max);
   throw UsageError("expected " + want + " argument(s), got " + std::to_string(n) +
                    " (see 'yelan " + command_ + " --help')");
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> out;
+  std::size_t at = 0;
+  while (at <= text.size()) {
+    const std::size_t end = std::min(text.find(',', at), text.size());
+    if (end > at) out.push_back(text.substr(at, end - at));
+    at = end + 1;
+  }
+  return out;
 }
 
 }  // namespace yelan::cli

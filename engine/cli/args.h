@@ -35,4 +35,7 @@ class Args {
   std::vector<std::string> positionals_;
 };
 
+// "a,b,,c" -> {a, b, c}: the comma lists of options such as --configs or --threads-list.
+std::vector<std::string> split_list(const std::string& text);
+
 }  // namespace yelan::cli

@@ -283,11 +283,7 @@ int weights_init(const std::vector<std::string>& argv, std::ostream& out) {
   pose.params(pp);
   weights::randomise_batchnorm(mp, std::uint64_t(seed) * 2 + 3);
   weights::randomise_batchnorm(pp, std::uint64_t(seed) * 2 + 4);
-  weights::Weights w;
-  w.config_json = cfg.json;
-  w.groups["mask"] = weights::group_of(mp);
-  w.groups["pose"] = weights::group_of(pp);
-  weights::save_weights(*o, w);
+  weights::save_weights(*o, weights::weights_of(cfg, mp, pp));
   out << "wrote " << *o << ": config " << cfg.name << ", seed " << seed << ", " << count(mp, true) << " + " << count(pp, true)
       << " parameters\n";
   return kOk;

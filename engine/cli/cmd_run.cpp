@@ -21,12 +21,6 @@
 namespace yelan::cli {
 namespace {
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
-}
-
 void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
   const std::string ext = std::filesystem::path(path).extension().string();
   camera::TempFile tmp(path);
@@ -144,15 +138,15 @@ int cmd_run(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
       << std::setprecision(1) << double(s.poses) / wall << " poses/s on this machine; stage 1 ran on "
       << std::setprecision(1) << 100 * frac << "% of the ticks with events (beta " << std::setprecision(3) << opt.beta << "), " << s.stale
       << " ticks without events repeated the last pose\n"
-      << std::setprecision(2) << "per tick ms p50/p99: TORE " << percentile(s.times.tore_ms, 0.5) << "/"
-      << percentile(s.times.tore_ms, 0.99) << ", stage 1 " << percentile(s.times.stage1_ms, 0.5) << "/"
-      << percentile(s.times.stage1_ms, 0.99) << ", stage 2 " << percentile(s.times.stage2_ms, 0.5) << "/"
-      << percentile(s.times.stage2_ms, 0.99) << ", whole tick " << percentile(s.times.tick_ms, 0.5) << "/"
-      << percentile(s.times.tick_ms, 0.99) << "\n";
+      << std::setprecision(2) << "per tick ms p50/p99: TORE " << run::percentile(s.times.tore_ms, 0.5) << "/"
+      << run::percentile(s.times.tore_ms, 0.99) << ", stage 1 " << run::percentile(s.times.stage1_ms, 0.5) << "/"
+      << run::percentile(s.times.stage1_ms, 0.99) << ", stage 2 " << run::percentile(s.times.stage2_ms, 0.5) << "/"
+      << run::percentile(s.times.stage2_ms, 0.99) << ", whole tick " << run::percentile(s.times.tick_ms, 0.5) << "/"
+      << run::percentile(s.times.tick_ms, 0.99) << "\n";
   if (const auto j = a.value("--stats-json")) {
     std::ofstream f(*j);
-    f << "{\"poses_per_s\": " << double(s.poses) / wall << ", \"p50_ms\": " << percentile(s.times.tick_ms, 0.5)
-      << ", \"p99_ms\": " << percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << frac
+    f << "{\"poses_per_s\": " << double(s.poses) / wall << ", \"p50_ms\": " << run::percentile(s.times.tick_ms, 0.5)
+      << ", \"p99_ms\": " << run::percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << frac
       << ", \"threads\": " << yelan::threads() << ", \"config\": \"" << pipe.config_name() << "\", \"poses\": " << s.poses
       << ", \"ticks\": " << s.ticks << ", \"stale_ticks\": " << s.stale << "}\n";
   }

@@ -41,14 +41,7 @@ double parse_duration(const std::string& s) {
   return v * scale;
 }
 
-std::vector<std::string> csv(const std::optional<std::string>& s) {
-  std::vector<std::string> out;
-  if (!s) return out;
-  std::istringstream in(*s);
-  for (std::string p; std::getline(in, p, ',');)
-    if (!p.empty()) out.push_back(p);
-  return out;
-}
+std::vector<std::string> csv(const std::optional<std::string>& s) { return s ? split_list(*s) : std::vector<std::string>{}; }
 
 // A grid member's seed: stable under filtering and reordering of the grid.
 std::uint64_t member_seed(std::uint64_t seed, const std::string& name) {

@@ -2,7 +2,6 @@
 #include <unistd.h>
 
 #include <iostream>
-#include <sstream>
 
 #include "camera/sim/presets.h"
 #include "engine/cli/args.h"
@@ -21,9 +20,7 @@ std::vector<sim::SimSpec> scenes_from(const std::string& text) {
   if (text == "train" || text == "test") {
     names = sim::grid_presets(text);
   } else {
-    std::istringstream in(text);
-    for (std::string p; std::getline(in, p, ',');)
-      if (!p.empty()) names.push_back(p);
+    names = split_list(text);
   }
   if (names.empty()) throw UsageError("--sim: no scenes in '" + text + "'");
   std::vector<sim::SimSpec> out;

@@ -1,5 +1,6 @@
 #include "engine/run/pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -243,6 +244,12 @@ const std::vector<float>& PosePipeline::last_mask() const {
 int PosePipeline::mask_downscale() const { return impl_->nets.cfg.downscale; }
 double PosePipeline::focal_px() const { return kFocalPx; }
 bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
+}
 
 std::string pose_csv_header() {
   static const char* names[13] = {"head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",

@@ -72,6 +72,9 @@ class PosePipeline {
 // forearms, thighs, shanks) sum to a body of the given height (Drillis-Contini fractions).
 double head_depth_from_height(const std::array<std::array<double, 3>, 13>& joints_at_unit_depth, double height_mm);
 
+// The q-quantile (0..1) of per-tick times, nearest rank; 0 for none.
+double percentile(std::vector<double> v, double q);
+
 // CSV: t_us, then x,y,z (mm) of the 13 joints in SPEC order, confidence, mask_ran.
 std::string pose_csv_header();
 std::string pose_csv_row(const Pose& p);

@@ -126,14 +126,6 @@ void truncate_log(const std::string& path, std::int64_t step) {
   tmp.commit();
 }
 
-weights::Weights snapshot(const ModelConfig& cfg, layers::ParamList& mp, layers::ParamList& pp) {
-  weights::Weights w;
-  w.config_json = cfg.json;
-  w.groups["mask"] = weights::group_of(mp);
-  w.groups["pose"] = weights::group_of(pp);
-  return w;
-}
-
 std::string eta_text(double s) {
   std::ostringstream o;
   if (s >= 3600) o << int(s / 3600) << "h" << std::setw(2) << std::setfill('0') << int(s / 60) % 60 << "m";
@@ -216,7 +208,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   // Weights first, then the state with the weights' checksum: a stop between the two is
   // detected on --resume instead of mixing two steps.
   auto checkpoint = [&] {
-    weights::save_weights(ckpt, snapshot(cfg, mp, pp));
+    weights::save_weights(ckpt, weights::weights_of(cfg, mp, pp));
     st.weights_hash = file_hash(ckpt);
     st.adam_t = adam.steps();
     st.adam_epochs = adam.epochs();
@@ -306,7 +298,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       if (val < st.best_val) {
         st.best_val = val;
         st.bad_epochs = 0;
-        weights::save_weights((fs::path(spec.out_dir) / "best.h5").string(), snapshot(cfg, mp, pp));
+        weights::save_weights((fs::path(spec.out_dir) / "best.h5").string(), weights::weights_of(cfg, mp, pp));
       } else {
         ++st.bad_epochs;
       }
@@ -338,7 +330,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     }
   }
   checkpoint();
-  weights::save_weights((fs::path(spec.out_dir) / "final.h5").string(), snapshot(cfg, mp, pp));
+  weights::save_weights((fs::path(spec.out_dir) / "final.h5").string(), weights::weights_of(cfg, mp, pp));
   if (spec.progress_tty) err << "\n";
   result.steps = st.step;
   result.last_loss = loss;
