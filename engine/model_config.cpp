@@ -40,6 +40,12 @@ std::string get_str(const json& o, const std::string& path, const char* key) {
   return o[key].get<std::string>();
 }
 
+bool get_bool_or(const json& o, const std::string& path, const char* key, bool fallback) {
+  if (!o.contains(key)) return fallback;
+  if (!o[key].is_boolean()) throw ConfigError(path + "." + key + ": expected true or false, got " + o[key].dump());
+  return o[key].get<bool>();
+}
+
 }  // namespace
 
 int ModelConfig::scaled(int base, double mult) {
@@ -72,9 +78,12 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.stages = get_int(p, where + ".pose", "stages");
   c.joints = get_int(p, where + ".pose", "joints");
   const std::string mode = get_str(p, where + ".pose", "convlstm");
-  if (mode != "bidirectional" && mode != "causal")
-    throw ConfigError(where + ": pose.convlstm must be bidirectional or causal, got '" + mode + "'");
+  if (mode != "bidirectional" && mode != "causal" && mode != "none")
+    throw ConfigError(where + ": pose.convlstm must be bidirectional, causal or none, got '" + mode + "'");
   c.bidirectional = mode == "bidirectional";
+  c.convlstm = mode != "none";
+  c.masked_input = get_bool_or(p, where + ".pose", "masked_input", true);
+  c.representation = i.contains("representation") ? get_str(i, where + ".input", "representation") : "tore";
   const struct { bool ok; const char* msg; } checks[] = {
       {c.channels >= 1, "input.channels must be >= 1"},
       {c.downscale >= 1, "input.downscale must be >= 1"},
@@ -82,6 +91,9 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.mask_width > 0 && c.pose_width > 0, "width_mult must be > 0"},
       {c.n_masks >= 1 && c.hidden >= 1 && c.stages >= 1 && c.joints >= 1,
        "n_masks, hidden, stages and joints must be >= 1"},
+      {c.representation == "tore" || c.representation == "counts", "input.representation must be tore or counts"},
+      {c.representation != "tore" || c.channels % 2 == 0, "input.channels must be even for TORE (2K planes)"},
+      {c.representation != "counts" || c.channels == 2, "input.channels must be 2 for counts (one per polarity)"},
       {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},
   };
   for (const auto& ch : checks)

@@ -19,6 +19,11 @@ struct ModelConfig {
   double pose_width = 1.0;
   int hidden = 128, stages = 3, joints = 13;
   bool bidirectional = true;
+  bool convlstm = true;       // pose.convlstm "none": the skip block sees the head's features alone
+  bool masked_input = true;   // pose.masked_input false: stage 2 sees the whole input, no stage 1
+  // input.representation: "tore" (2K = channels TORE planes) or "counts" (2 channels: events
+  // of each polarity in the last frame period, log(1 + n); the constant-time-frame baseline)
+  std::string representation = "tore";
   std::string json;  // the source text
 
   int height() const { return sensor_height / downscale; }

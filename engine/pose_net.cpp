@@ -21,7 +21,7 @@ PoseNet::PoseNet(const ModelConfig& cfg)
       bn1_(cfg.resnet_c64(), true),
       pool_(3, 2, 1),
       cl_(cfg.resnet_mid(), cfg.hidden, cfg.bidirectional),
-      skip_(cfg.resnet_mid() + cfg.hidden, cfg.resnet_mid(), layers::ResidualKind::regular) {
+      skip_(cfg.resnet_mid() + (cfg.convlstm ? cfg.hidden : 0), cfg.resnet_mid(), layers::ResidualKind::regular) {
   if (cfg.stages > 8) throw ConfigError(cfg.name + ": at most 8 hourglass stages");
   const int c64 = cfg.resnet_c64(), mid = cfg.resnet_mid();
   for (int i = 0; i < 3; ++i) resnet_.push_back(std::make_unique<layers::BasicBlock>(c64, c64, 1));
@@ -42,7 +42,7 @@ void PoseNet::params(layers::ParamList& out) {
   bn1_.params("in_cnn.1.", out);
   for (int i = 0; i < 7; ++i)
     resnet_[i]->params(i < 3 ? "in_cnn.4." + std::to_string(i) + "." : "in_cnn.5." + std::to_string(i - 3) + ".", out);
-  cl_.params("cl.", out);
+  if (cfg_.convlstm) cl_.params("cl.", out);
   skip_.params("cl_skip_block.", out);
   static const char* plane_names[3] = {"xy_hm_cnns.", "zy_hm_cnns.", "xz_hm_cnns."};
   for (int p = 0; p < 3; ++p)
@@ -95,9 +95,13 @@ void PoseNet::forward(const Act& x, int S) {
   res_in_.assign(1, pooled_);
   for (auto& b : resnet_) res_in_.push_back(b->forward(res_in_.back()));
   feats_ = res_in_.back();
-  cl_out_ = cl_.forward(feats_, S);
-  cat_ = cat_buf_.get(feats_.n, feats_.c + cl_out_.c, feats_.h, feats_.w);
-  layers::concat_channels(feats_, cl_out_, cat_);
+  if (cfg_.convlstm) {
+    cl_out_ = cl_.forward(feats_, S);
+    cat_ = cat_buf_.get(feats_.n, feats_.c + cl_out_.c, feats_.h, feats_.w);
+    layers::concat_channels(feats_, cl_out_, cat_);
+  } else {
+    cat_ = feats_;
+  }
   const Act skip_out = skip_.forward(cat_);
   const int T = cfg_.stages, J = cfg_.joints;
   inp_.assign(T, Act{});
@@ -171,12 +175,15 @@ void PoseNet::backward(const Act& x, const std::vector<std::array<Act, 3>>& dhea
   // skip block over cat[feats, convlstm(feats)]
   const Act dcat = g_cat_.like(cat_);
   skip_.backward(cat_, dI, dcat);
-  const Act dfeat = g_feat_a_.like(feats_), dcl = g_cl_.like(cl_out_);
-  layers::split_channels(dcat, dfeat, dcl);
-  const Act dfeat_cl = g_feat_b_.like(feats_);
-  cl_.backward(feats_, dcl, dfeat_cl);
-  layers::accumulate(dfeat_cl, dfeat);
-  Act g = dfeat;
+  Act g = dcat;
+  if (cfg_.convlstm) {
+    const Act dfeat = g_feat_a_.like(feats_), dcl = g_cl_.like(cl_out_);
+    layers::split_channels(dcat, dfeat, dcl);
+    const Act dfeat_cl = g_feat_b_.like(feats_);
+    cl_.backward(feats_, dcl, dfeat_cl);
+    layers::accumulate(dfeat_cl, dfeat);
+    g = dfeat;
+  }
   for (int i = int(resnet_.size()) - 1; i >= 0; --i) {
     const Act d = (i % 2 ? g_feat_b_ : g_feat_a_).like(res_in_[i]);
     resnet_[i]->backward(res_in_[i], g, d);

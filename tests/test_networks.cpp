@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -33,6 +34,40 @@ std::map<std::string, std::vector<std::int64_t>> manifest(const std::string& con
     for (const auto& e : g) out[e.at("name").get<std::string>()] = e.at("shape").get<std::vector<std::int64_t>>();
   }
   return out;
+}
+
+// Gradients of sum(w * joints) against finite differences for the conv weights `pick`
+// chooses (key, index among conv weights); returns the number of samples checked.
+int check_pose_gradients(PoseNet& net, const ModelConfig& cfg, std::uint64_t seed,
+                         const std::function<bool(const std::string&, int)>& pick) {
+  net.init(seed);
+  net.set_training(false);  // fixed BN statistics: the loss is a function of each weight alone
+  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), int(seed) + 2);
+  std::vector<float> wj(std::size_t(cfg.window) * cfg.joints * 3);
+  for (std::size_t i = 0; i < wj.size(); ++i) wj[i] = std::sin(0.7 * i + double(seed));
+  layers::ParamList params;
+  net.params(params);
+  auto loss = [&] {
+    net.weights_changed();
+    net.forward(x.act, cfg.window);
+    double s = 0;
+    for (std::size_t i = 0; i < wj.size(); ++i) s += double(wj[i]) * net.joints()[i];
+    return s;
+  };
+  for (auto& p : params)
+    if (p.param->trainable) p.param->grad.zero();
+  loss();
+  net.backward(x.act, {}, wj.data());
+  int layer = 0, checked = 0;
+  for (auto& p : params) {
+    if (!p.param->trainable || p.param->shape.size() != 4) continue;  // conv weights
+    if (!pick(p.key, layer++)) continue;
+    INFO(p.key);
+    checked += yelan::test::check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
+                                            yelan::test::sample_all(p.param->numel(), p.param->numel() / 2 + 1), 1e-2,
+                                            1e-2, p.key.c_str(), 0.0);
+  }
+  return checked;
 }
 
 }  // namespace
@@ -110,34 +145,8 @@ TEST_CASE("pose net forward: heatmaps are distributions, joints inside [-1, 1]",
 TEST_CASE("pose net backward: gradients by finite differences (tiny config)", "[networks][pose]") {
   const ModelConfig cfg = load_model_config("tiny");
   PoseNet net(cfg);
-  net.init(2);
-  net.set_training(false);  // fixed BN statistics: the loss is a function of each weight alone
-  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 4);
-  std::vector<float> wj(std::size_t(cfg.window) * cfg.joints * 3);
-  for (std::size_t i = 0; i < wj.size(); ++i) wj[i] = std::sin(0.7 * i);
-  layers::ParamList params;
-  net.params(params);
-  auto loss = [&] {
-    net.weights_changed();
-    net.forward(x.act, cfg.window);
-    double s = 0;
-    for (std::size_t i = 0; i < wj.size(); ++i) s += double(wj[i]) * net.joints()[i];
-    return s;
-  };
-  for (auto& p : params)
-    if (p.param->trainable) p.param->grad.zero();
-  loss();
-  net.backward(x.act, {}, wj.data());
-  int layer = 0, checked = 0;
-  for (auto& p : params) {
-    if (!p.param->trainable || p.param->shape.size() != 4) continue;  // conv weights
-    if (layer++ % 23) continue;                                       // a spread sample of layers
-    INFO(p.key);
-    checked += yelan::test::check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
-                                 yelan::test::sample_all(p.param->numel(), p.param->numel() / 2 + 1), 1e-2, 1e-2,
-                                 p.key.c_str(), 0.0);
-  }
-  CHECK(checked >= 10);  // most samples avoid ReLU kinks
+  // a spread sample of layers; most samples avoid ReLU kinks
+  CHECK(check_pose_gradients(net, cfg, 2, [](const std::string&, int layer) { return layer % 23 == 0; }) >= 10);
 }
 
 TEST_CASE("mask net parameters match the reference's names and shapes", "[networks][mask]") {
@@ -221,4 +230,49 @@ TEST_CASE("causal pose net streamed a frame at a time equals the window forward"
   PoseNet bidir(load_model_config("tiny"));
   CHECK_THROWS_AS(bidir.set_streaming(true), std::invalid_argument);
   net.set_streaming(false);
+}
+
+TEST_CASE("config switches of the baselines: representation, convlstm none, masked_input", "[networks][config]") {
+  const std::string ok =
+      R"({"name":"t","input":{"channels":2,"sensor_height":40,"sensor_width":40,"downscale":1,"window":2,"representation":"counts"},)"
+      R"("mask":{"width_mult":0.5,"n_masks":4},"pose":{"width_mult":0.5,"hidden":8,"stages":1,"joints":13,"convlstm":"none","masked_input":false}})";
+  const ModelConfig c = parse_model_config(ok, "x.json");
+  CHECK(c.representation == "counts");
+  CHECK_FALSE(c.convlstm);
+  CHECK_FALSE(c.masked_input);
+  CHECK(load_model_config("small").convlstm);
+  CHECK(load_model_config("small").masked_input);
+  CHECK(load_model_config("small").representation == "tore");
+  std::string bad = ok;
+  bad.replace(bad.find("\"channels\":2"), 12, "\"channels\":6");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("must be 2 for counts"));
+  bad = ok;
+  bad.replace(bad.find("counts"), 6, "voxels");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("input.representation"));
+  bad = ok;
+  bad.replace(bad.find("false"), 5, "\"no\"");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("x.json.pose.masked_input: expected true or false"));
+}
+
+TEST_CASE("pose net without ConvLSTM: no cl weights, skip block on the head alone, gradients by finite differences", "[networks][pose]") {
+  ModelConfig with = load_model_config("tiny");
+  std::string text = with.json;
+  text.replace(text.find("bidirectional"), 13, "none");
+  const ModelConfig cfg = parse_model_config(text, "tiny-none");
+  PoseNet net(cfg);
+  layers::ParamList params;
+  net.params(params);
+  bool skip_checked = false;
+  for (auto& p : params) {
+    CHECK(p.key.rfind("cl.", 0) != 0);
+    if (p.key == "cl_skip_block.module.0.weight") {
+      CHECK(p.param->shape[1] == cfg.resnet_mid());  // in channels: the head's, no hidden state
+      skip_checked = true;
+    }
+  }
+  REQUIRE(skip_checked);
+  const int checked = check_pose_gradients(net, cfg, 3, [](const std::string& key, int) {
+    return key == "in_cnn.0.weight" || key.rfind("cl_skip_block.", 0) == 0 || key.rfind("in_cnn.5.3.", 0) == 0;
+  });
+  CHECK(checked >= 10);
 }

@@ -1,5 +1,6 @@
 // `yelan sim` through the CLI: byte-identical recordings per seed, `yelan info` on them,
 // previews, grids with a manifest, and clear errors.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <unistd.h>
 
@@ -68,7 +69,34 @@ TEST_CASE("yelan sim: a grid writes one recording per member and a manifest", "[
   const std::string m = slurp(d / "grid/manifest.json");
   CHECK(has(m, "\"preset\": \"lena-dance-back-low-static\""));
   CHECK(has(m, "\"split\": \"test\""));
-  CHECK(has(g.err, "[2/2]"));
+  CHECK(std::filesystem::exists(d / "grid/lena-dance-back-low-static-occluded.yelan.h5"));  // the test split has both
+  CHECK(has(g.err, "[4/4]"));
+}
+
+TEST_CASE("yelan sim --splits writes the split files, and --sim @FILE reads them with line numbers on errors", "[cli][sim]") {
+  TempDir d;
+  const Result r = cli({"sim", "--splits", d / "splits", "--seed", "3", "--scenes", "5"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  auto lines = [](const std::string& text) {
+    std::vector<std::string> out;
+    std::istringstream in(text);
+    for (std::string l; std::getline(in, l);)
+      if (!l.empty() && l[0] != '#') out.push_back(l);
+    return out;
+  };
+  CHECK(lines(slurp(d / "splits/train.txt")).size() == 1848);
+  const auto test = lines(slurp(d / "splits/test.txt"));
+  CHECK(test.size() == 432);
+  const auto drawn = lines(slurp(d / "splits/test-seed3-5.txt"));
+  REQUIRE(drawn.size() == 5);
+  for (const auto& n : drawn) CHECK(std::find(test.begin(), test.end(), n) != test.end());
+  CHECK(has(slurp(d / "splits/test.txt"), "# regenerate: yelan sim --splits"));
+  std::ofstream(d / "bad.txt") << "# a comment\n\nlena-dance-front-low-static\nlena-dance-sideways-low-static\n";
+  const Result bad = cli({"train", "--stage", "pose", "--config", "tiny", "--sim", "@" + (d / "bad.txt"), "-o", d / "run"});
+  CHECK(bad.code == 2);
+  CHECK(has(bad.err, "bad.txt:4:"));
+  CHECK(cli({"train", "--stage", "pose", "--config", "tiny", "--sim", "@" + (d / "missing.txt"), "-o", d / "run"}).code == 2);
 }
 
 TEST_CASE("yelan sim: bad arguments exit 2 and name the problem", "[cli][sim]") {

@@ -169,7 +169,10 @@ std::vector<std::string> grid_presets(const std::string& which, const GridFilter
         for (const char* l : {"high", "medium", "low"})
           for (const char* b : {"static", "dynamic"})
             if (keep(f.views, v) && keep(f.lights, l) && keep(f.backgrounds, b))
-              out.push_back(c.name + "-" + m + "-" + v + "-" + l + "-" + b);
+              // Held-out characters are also tested behind occluders; training sees occlusion
+              // only as augmentation.
+              for (const char* o : {"", "-occluded"})
+                if (test || !*o) out.push_back(c.name + "-" + m + "-" + v + "-" + l + "-" + b + o);
     }
   }
   return out;

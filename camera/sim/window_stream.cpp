@@ -1,5 +1,6 @@
 #include "camera/sim/window_stream.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -12,8 +13,18 @@ struct SimWindowStream::Sink final : SimSink {
   ToreVolume tore;
   std::vector<std::uint8_t> last_mask;
   std::int64_t mask_t = -1;
-  Sink(int w, int h, ToreOptions o) : tore(w, h, o) {}
-  void events(std::span<const Event> ev) override { tore.update(ev); }
+  std::vector<float> counts;  // 2 x H x W when counting, else empty
+  bool counting_from_frame = false;  // the warm-up's events are out of the first count
+  int width;
+  Sink(int w, int h, ToreOptions o, bool count) : tore(w, h, o), width(w) {
+    if (count) counts.assign(std::size_t(2) * w * h, 0.f);
+  }
+  void events(std::span<const Event> ev) override {
+    tore.update(ev);
+    if (counts.empty()) return;
+    const std::size_t plane = counts.size() / 2;
+    for (const Event& e : ev) counts[(e.p ? 0 : plane) + std::size_t(e.y) * width + e.x] += 1.f;
+  }
   void mask(std::int64_t t_us, const RenderedFrame& f) override {
     mask_t = t_us;
     last_mask.assign(f.mask.begin(), f.mask.end());
@@ -40,7 +51,7 @@ void SimWindowStream::start_scene() {
   spec.mask_hz = opt_.frame_hz;
   ++started_;
   sim_ = std::make_unique<Simulator>(spec);
-  sink_ = std::make_unique<Sink>(sim_->camera().width, sim_->camera().height, opt_.tore);
+  sink_ = std::make_unique<Sink>(sim_->camera().width, sim_->camera().height, opt_.tore, opt_.counts);
   frame_index_ = std::llround(std::ceil(opt_.warmup_s * opt_.frame_hz));
 }
 
@@ -53,12 +64,23 @@ void SimWindowStream::next(SimWindow& out) {
   out.frames.resize(std::size_t(opt_.window));
   for (SimFrame& f : out.frames) {
     const double t = double(frame_index_) * dt;
+    if (opt_.counts && !sink_->counting_from_frame) {
+      sim_->run_until(std::max(0.0, t - dt), *sink_);
+      std::fill(sink_->counts.begin(), sink_->counts.end(), 0.f);
+      sink_->counting_from_frame = true;
+    }
     sim_->run_until(t, *sink_);
     f.t_us = std::llround(t * 1e6);
     if (sink_->mask_t != f.t_us) throw std::logic_error("simulator stream: no mask rendered at the frame time");
     f.tore.resize(sink_->tore.volume_size());
     sink_->tore.readout(f.t_us, f.tore.data());
     f.mask = sink_->last_mask;
+    if (opt_.counts) {
+      f.counts = sink_->counts;
+      std::fill(sink_->counts.begin(), sink_->counts.end(), 0.f);
+    } else {
+      f.counts.clear();
+    }
     const Label l = sim_->label_at(t);
     f.joints_mm = l.joints_mm;
     f.valid = l.valid;

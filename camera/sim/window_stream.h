@@ -16,6 +16,8 @@ namespace yelan::camera::sim {
 struct SimFrame {
   std::int64_t t_us = 0;
   std::vector<float> tore;          // 2K x H x W, channel-major
+  std::vector<float> counts;        // with WindowStreamOptions::counts: 2 x H x W, events of each
+                                    // polarity (positive first) in the frame period ending here
   std::vector<std::uint8_t> mask;   // H x W, 1 = human
   Joints13 joints_mm;               // camera frame
   std::array<std::uint8_t, kJointCount> valid{};
@@ -35,6 +37,7 @@ struct WindowStreamOptions {
   double scene_s = 2.0;             // each scene runs this long before the next one starts
   ToreOptions tore;
   bool shuffle = false;             // scene k is a seeded random pick of the list, not k mod n
+  bool counts = false;              // also fill SimFrame::counts (constant-time event frames)
 };
 
 class SimWindowStream {

@@ -27,7 +27,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   spec.seconds_per_scene = std::stod(a.value_or("--seconds", "1"));
   spec.true_mask = a.flag("--true-mask");
   if (*simv == "test") {
-    for (const auto& n : train::draw_test_scenes(spec.seed, a.int_value_or("--scenes", 24, 1, 1 << 20)))
+    for (const auto& n : train::draw_test_scenes(spec.seed, a.int_value_or("--scenes", 48, 1, 1 << 20)))
       spec.scenes.push_back(camera::sim::preset_spec(n));
   } else {
     spec.scenes = scenes_from(*simv);

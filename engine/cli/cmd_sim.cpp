@@ -20,6 +20,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/train/evaluate.h"
 
 namespace yelan::cli {
 namespace {
@@ -101,6 +102,33 @@ int run_one(const sim::SimSpec& spec, const Args& a, std::ostream& out, std::ost
   return kOk;
 }
 
+// The benchmark split as files of preset names (one per line, '#' comments), so a run can
+// name it (--sim @FILE) and anyone can diff it against what the simulator draws.
+int write_splits(const std::string& dir, const Args& a, std::ostream& out) {
+  const int seed = a.int_value_or("--seed", 1, 0, 1 << 30), scenes = a.int_value_or("--scenes", 48, 1, 1 << 20);
+  std::filesystem::create_directories(dir);
+  auto write = [&](const std::string& name, const std::string& header, const std::vector<std::string>& names) {
+    const std::string path = (std::filesystem::path(dir) / name).string(), tmp = camera::temp_path_for(path);
+    {
+      std::ofstream f(tmp);
+      f << header << "# regenerate: yelan sim --splits " << dir << " --seed " << seed << " --scenes " << scenes << "\n";
+      for (const auto& n : names) f << n << "\n";
+      if (!f) throw std::runtime_error("cannot write " + tmp);
+    }
+    std::filesystem::rename(tmp, path);
+    out << path << ": " << names.size() << " scenes\n";
+  };
+  write("train.txt", "# training split: the 11 training characters x the CMU train clips and procedural dances x\n"
+                     "# 4 views x 3 lightings x 2 backgrounds (occlusion only as augmentation)\n", sim::grid_presets("train"));
+  write("test.txt", "# test split: held-out characters (jade, kurt, lena) x held-out clips and procedural dances x\n"
+                    "# 4 views x 3 lightings x 2 backgrounds x clear/occluded\n", sim::grid_presets("test"));
+  write("test-seed" + std::to_string(seed) + "-" + std::to_string(scenes) + ".txt",
+        "# the scenes of: yelan eval --sim test --seed " + std::to_string(seed) + " --scenes " + std::to_string(scenes) +
+            " (conditions in turn, members drawn with the seed)\n",
+        train::draw_test_scenes(std::uint64_t(seed), scenes));
+  return kOk;
+}
+
 int run_grid(const std::string& which, const Args& a, std::ostream& out, std::ostream& err) {
   const auto dir = a.value("--out-dir");
   if (!dir) throw UsageError("sim --grid needs --out-dir DIR");
@@ -173,12 +201,13 @@ int list(std::ostream& out) {
 int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("sim", argv,
                {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
-                "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit"},
+                "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes"},
                {"--list", "--quiet", "--force"});
   a.expect_positionals(0, 0);
   if (a.value("--threads")) omp_set_num_threads(a.int_value_or("--threads", 1, 1, 256));
   if (a.flag("--list")) return list(out);
   if (const auto g = a.value("--grid")) return run_grid(*g, a, out, err);
+  if (const auto d = a.value("--splits")) return write_splits(*d, a, out);
   const auto preset = a.value("--preset"), config = a.value("--config");
   if (bool(preset) == bool(config)) throw UsageError("sim needs exactly one of --preset NAME and --config scene.json");
   sim::SimSpec spec;

@@ -1,6 +1,7 @@
 // `yelan train`: the CPU trainer (engine/train) on windows streamed from the simulator.
 #include <unistd.h>
 
+#include <fstream>
 #include <iostream>
 
 #include "camera/sim/presets.h"
@@ -14,11 +15,27 @@ namespace yelan::cli {
 
 namespace sim = camera::sim;
 
-// "train" / "test" (the grid splits) or comma-separated preset names (also used by eval).
+// "train" / "test" (the grid splits), @FILE (one preset per line, '#' comments: the files
+// of benchmarks/splits) or comma-separated preset names (also used by eval).
 std::vector<sim::SimSpec> scenes_from(const std::string& text) {
   std::vector<std::string> names;
   if (text == "train" || text == "test") {
     names = sim::grid_presets(text);
+  } else if (!text.empty() && text[0] == '@') {
+    std::ifstream f(text.substr(1));
+    if (!f) throw UsageError("--sim " + text + ": cannot read " + text.substr(1));
+    std::string line;
+    for (int no = 1; std::getline(f, line); ++no) {
+      const auto a = line.find_first_not_of(" \t\r"), b = line.find_last_not_of(" \t\r");
+      if (a == std::string::npos || line[a] == '#') continue;
+      const std::string n = line.substr(a, b - a + 1);
+      try {
+        sim::preset_spec(n);
+      } catch (const std::exception& e) {
+        throw UsageError(text.substr(1) + ":" + std::to_string(no) + ": " + e.what());
+      }
+      names.push_back(n);
+    }
   } else {
     names = split_list(text);
   }

@@ -203,14 +203,19 @@ int verify(const Args& args, std::ostream& out, std::ostream& err) {
 }
 
 // The mask group of one file and the pose group of another (trained in separate stages)
-// into one model file; both must hold the same config.
+// into one model file. The mask net depends on the input and mask sections only, so those
+// must agree; the result keeps the pose file's config (an ablation of the pose net can take
+// the mask net of the full model).
 int combine(const Args& a, std::ostream& out) {
   a.expect_positionals(0, 0);
   const auto m = a.value("--mask"), p = a.value("--pose"), o = a.value("-o");
   if (!m || !p || !o) throw UsageError("weights combine needs --mask A.h5 --pose B.h5 -o OUT.h5");
   const weights::Weights wm = weights::load_weights(*m), wp = weights::load_weights(*p);
-  if (wm.config_json != wp.config_json)
-    throw UsageError("weights combine: " + *m + " and " + *p + " hold different configs");
+  const auto cm = weights::Json::parse(wm.config_json), cp = weights::Json::parse(wp.config_json);
+  for (const char* key : {"input", "mask"})
+    if (!cm.find(key) || !cp.find(key) || cm.find(key)->dump() != cp.find(key)->dump())
+      throw UsageError("weights combine: " + *m + " and " + *p + " differ in the config's '" + key +
+                       "' section, so the mask net does not fit the pose net's input");
   weights::Weights w = wp;
   w.groups["mask"] = wm.groups.at("mask");
   weights::save_weights(*o, w);

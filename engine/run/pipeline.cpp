@@ -59,6 +59,7 @@ struct PosePipeline::Impl {
   int in_use = 0;
   // stage 2
   int slot = 0;
+  std::vector<float> ones;  // the "mask" of configs without stage 1
   std::vector<std::int64_t> slot_t;
   std::vector<bool> slot_mask_ran;
   Pose last;
@@ -72,6 +73,10 @@ struct PosePipeline::Impl {
       throw std::invalid_argument("the events are " + std::to_string(sw) + "x" + std::to_string(sh) + ", the model (" +
                                   path + ") expects " + std::to_string(cfg.sensor_width) + "x" +
                                   std::to_string(cfg.sensor_height));
+    if (cfg.representation != "tore")
+      throw std::invalid_argument(path + ": config '" + cfg.name + "' reads " + cfg.representation +
+                                  " frames; yelan run streams TORE only (the other inputs are baselines for yelan eval)");
+    if (!cfg.masked_input) ones.assign(std::size_t(cfg.height()) * cfg.width(), 1.f);
     if (!(o.rate_hz >= 1 && o.rate_hz <= 1000)) throw std::invalid_argument("rate must be 1..1000 poses per second");
     dt_us = std::llround(1e6 / o.rate_hz);
     vol.resize(tore.volume_size());
@@ -138,7 +143,7 @@ struct PosePipeline::Impl {
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
     t0 = Clock::now();
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
-    const bool run_mask = !have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < opt.beta;
+    const bool run_mask = cfg.masked_input && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < opt.beta);
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);
@@ -162,7 +167,7 @@ struct PosePipeline::Impl {
     const int n = cfg.bidirectional ? slot : 0;
     const std::size_t plane = unmasked.act.pixels() * 16, per_frame = std::size_t(unmasked.act.cb()) * plane;
     in_use = use;
-    const std::vector<float>& keep = masks[std::size_t(use)];
+    const std::vector<float>& keep = cfg.masked_input ? masks[std::size_t(use)] : ones;
     for (int cb = 0; cb < unmasked.act.cb(); ++cb)
       for (std::size_t i = 0; i < unmasked.act.pixels(); ++i)
         for (int l = 0; l < 16; ++l)

@@ -14,20 +14,28 @@ void OwnedAct::resize(int n, int c, int h, int w) {
 }
 
 BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source)
-    : cfg_(cfg), windows_(windows), source_(source) {
-  if (cfg.channels != 6)
+    : cfg_(cfg), windows_(windows), source_(source != MaskSource::none && !cfg.masked_input ? MaskSource::unmasked : source) {
+  if (cfg.representation == "tore" && cfg.channels != 6)
     throw std::invalid_argument("config " + cfg.name + ": " + std::to_string(cfg.channels) +
                                 " input channels, but TORE with K = 3 gives 6");
   const int n = windows * cfg.window, h = cfg.height(), w = cfg.width();
   b_.input.resize(n, cfg.channels, h, w);
-  if (source == MaskSource::none) b_.labels.resize(n, cfg.n_masks, h, w);
+  if (source_ == MaskSource::none) b_.labels.resize(n, cfg.n_masks, h, w);
   b_.target.assign(std::size_t(n) * kJoints * 3, 0.f);
   b_.valid.assign(std::size_t(n) * kJoints, 0.f);
   b_.valid_u8.assign(std::size_t(n) * kJoints, 0);
   b_.truth_mm.resize(std::size_t(n));
   b_.z_ref.resize(std::size_t(n));
   b_.frames = n;
-  if (source == MaskSource::net) one_.resize(cfg.window, cfg.channels, h, w);
+  if (source_ == MaskSource::net) one_.resize(cfg.window, cfg.channels, h, w);
+}
+
+std::vector<float> input_planes(const ModelConfig& cfg, const camera::sim::SimFrame& f) {
+  if (cfg.representation == "tore") return f.tore;
+  if (f.counts.empty()) throw std::logic_error("counts input, but the simulator stream did not count events");
+  std::vector<float> v(f.counts.size());
+  for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::log1p(f.counts[i]);
+  return v;
 }
 
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
@@ -89,8 +97,9 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
   for (int t = 0; t < S; ++t) {
     const int n = used_ * S + t;
     const auto& f = w.frames[std::size_t(t)];
-    downscale_tore(f.tore, sh, sw, d, in, n);
-    if (source_ == MaskSource::net) downscale_tore(f.tore, sh, sw, d, one_.act, t);
+    const std::vector<float> planes = input_planes(cfg_, f);
+    downscale_tore(planes, sh, sw, d, in, n);
+    if (source_ == MaskSource::net) downscale_tore(planes, sh, sw, d, one_.act, t);
     if (source_ == MaskSource::truth) {
       auto cells = mask_cells(f.mask, sw, d, H, W);
       for (float& c : cells) c = c > 0 ? 1.f : 0.f;  // any human pixel keeps the cell

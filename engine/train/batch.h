@@ -15,7 +15,13 @@
 
 namespace yelan::train {
 
-enum class MaskSource { none, truth, net };
+// none: the mask stage (labels, no masking); unmasked: the pose stage of a config with
+// pose.masked_input false (every other source becomes this one for such configs).
+enum class MaskSource { none, truth, net, unmasked };
+
+// The network's input planes of one frame: the TORE volume, or log(1 + n) of the event
+// counts for the "counts" representation.
+std::vector<float> input_planes(const ModelConfig& cfg, const camera::sim::SimFrame& f);
 
 // Mean of each d x d cell of a TORE volume (C x H x W, channel-major, the sensor's size) into
 // frame n of a blocked activation of the model's input size.

@@ -20,19 +20,16 @@ namespace sim = camera::sim;
 
 std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count) {
   const auto all = sim::grid_presets("test");
-  // Group by condition (the last three fields), then take conditions in turn.
+  // Group by condition (view, light, background and occlusion: the fields after character
+  // and motion), then take conditions in turn.
   std::map<std::string, std::vector<std::string>> by_cond;
-  for (const auto& n : all) {
-    std::size_t cut = n.size();
-    for (int i = 0; i < 3; ++i) cut = n.rfind('-', cut - 1);
-    by_cond[n.substr(cut + 1)].push_back(n);
-  }
+  for (const auto& n : all) by_cond[n.substr(n.find('-', n.find('-') + 1) + 1)].push_back(n);
   std::vector<const std::vector<std::string>*> conds;
   for (const auto& [c, v] : by_cond) conds.push_back(&v);
   std::vector<std::string> out;
   for (int k = 0; k < count; ++k) {
-    // A stride coprime with the 24 conditions: consecutive scenes differ in view, light and
-    // background, and any 24 in a row cover every condition once.
+    // A stride coprime with the 48 conditions: consecutive scenes differ in view, light and
+    // background, and any 48 in a row cover every condition once.
     const auto& members = *conds[std::size_t(k) * 7 % conds.size()];
     out.push_back(members[sim::hash64(seed, 0xe7a1, std::uint64_t(k)) % members.size()]);
   }
@@ -56,6 +53,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
     const sim::SimSpec& s = spec.scenes[i];
     sim::WindowStreamOptions o;
     o.window = cfg.window;
+    o.counts = cfg.representation == "counts";
     o.warmup_s = 0.1;
     const int windows = std::max(1, int(std::floor(spec.seconds_per_scene * o.frame_hz / cfg.window)));
     o.scene_s = o.warmup_s + windows * cfg.window / o.frame_hz + 1e-6;
@@ -88,7 +86,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         for (const auto& [name, value] : conditions) cond[name][value].add(pred, b.truth_mm[std::size_t(t)], valid);
       }
       // Stage 1 IoU: the current mask (binarised at 0.1) against the true mask, at the net's size.
-      if (!spec.true_mask) {
+      if (builder.source() == MaskSource::net) {
         const layers::Act& m = mask.masks();
         const float cut = std::log(0.1f / 0.9f);
         const int d = cfg.downscale;

@@ -145,7 +145,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.batch < 1 || spec.steps < 1 || spec.steps_per_epoch < 1)
     throw std::invalid_argument("batch, steps and steps per epoch must be >= 1");
   fs::create_directories(spec.out_dir);
-  if (pose_stage && spec.mask_weights.empty() && spec.init_weights.empty())
+  if (pose_stage && cfg.masked_input && spec.mask_weights.empty() && spec.init_weights.empty())
     err << "note: the pose net learns from the simulator's true masks; the mask group of the files written here is "
            "untrained (combine with a trained mask net: yelan weights combine; evaluate alone with --true-mask)\n";
   const std::string ckpt = (fs::path(spec.out_dir) / "checkpoint.h5").string();
@@ -196,6 +196,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   so.warmup_s = 0.1;
   so.scene_s = so.warmup_s + so.window / so.frame_hz + 1e-6;
   so.shuffle = true;
+  so.counts = cfg.representation == "counts";
   sim::SimWindowStream stream(spec.scenes, spec.seed, so);
   stream.seek_scene(std::uint64_t(st.step) * std::uint64_t(spec.batch));
   std::vector<sim::SimSpec> val_scenes = spec.val_scenes.empty() ? spec.scenes : spec.val_scenes;

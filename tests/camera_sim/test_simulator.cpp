@@ -151,10 +151,11 @@ TEST_CASE("sim: presets and scene.json", "[sim]") {
   CHECK_THROWS_WITH(spec_from_json("{", "s.json"), Catch::Contains("s.json: not JSON"));
   // The grid: 11 training characters x 7 motions x 4 x 3 x 2; 3 held-out x 3 motions x 24.
   CHECK(grid_presets("train").size() == 11 * 7 * 24);
-  CHECK(grid_presets("test").size() == 3 * 3 * 24);
+  CHECK(grid_presets("test").size() == 3 * 3 * 24 * 2);  // clear and occluded
   const auto f = grid_presets("test", {{"jade"}, {"05_16"}, {"front"}, {}, {"static"}});
-  REQUIRE(f.size() == 3);
+  REQUIRE(f.size() == 6);
   CHECK(f[0] == "jade-05_16-front-high-static");
+  CHECK(f[1] == "jade-05_16-front-high-static-occluded");
   for (const auto& n : grid_presets("all")) REQUIRE_NOTHROW(preset_spec(n));
 }
 
@@ -199,6 +200,7 @@ TEST_CASE("sim: CMU clips play from the mocap folder", "[sim]") {
   CHECK_THROWS_WITH(Simulator(s), Catch::Contains("99_99.bvh"));
 }
 
+#include "camera/sim/rng.h"
 #include "camera/sim/window_stream.h"
 
 TEST_CASE("sim: the window stream gives TORE, masks and joints per frame, reproducibly", "[sim]") {
@@ -260,4 +262,44 @@ TEST_CASE("sim: a recording longer than its clip plays the clip back and forth, 
     for (int j = 0; j < kJointCount; ++j) worst = std::max(worst, (p.joints_mm[j] - q.joints_mm[j]).norm());
   }
   CHECK(worst < 20);  // mm per ms: no jump at the turn
+}
+
+TEST_CASE("sim: the window stream's event counts are the events of each frame period", "[sim]") {
+  WindowStreamOptions o;
+  o.window = 3;
+  o.frame_hz = 50;
+  o.warmup_s = 0.04;
+  o.scene_s = 0.1;
+  o.counts = true;
+  const SimSpec scene = preset_spec("ben-dance7-front-high-static");
+  SimWindowStream stream({scene}, 3, o);
+  SimWindow w;
+  stream.next(w);
+  // The same scene run by hand, counting between the frame times (20, 40, 60, 80 ms).
+  SimSpec spec = scene;
+  spec.seed = hash64(3, 0x5717, 0) & 0xffffffffffffull;
+  spec.duration_s = o.scene_s;
+  spec.mask_hz = o.frame_hz;
+  struct Counter : SimSink {
+    std::vector<float> c = std::vector<float>(2u * 346 * 260, 0.f);
+    void events(std::span<const Event> ev) override {
+      for (const Event& e : ev) c[(e.p ? 0 : 346u * 260) + e.y * 346u + e.x] += 1.f;
+    }
+  } counter;
+  Simulator sim(spec);
+  sim.run_until(0.02, counter);
+  double total = 0;
+  for (int k = 0; k < 3; ++k) {
+    std::fill(counter.c.begin(), counter.c.end(), 0.f);
+    sim.run_until(0.04 + 0.02 * k, counter);
+    INFO("frame " << k);
+    REQUIRE(w.frames[std::size_t(k)].counts.size() == counter.c.size());
+    CHECK(w.frames[std::size_t(k)].counts == counter.c);
+    for (float v : counter.c) total += v;
+  }
+  CHECK(total > 1000);  // a dancer in bright light makes events
+  o.counts = false;
+  SimWindowStream plain({scene}, 3, o);
+  plain.next(w);
+  CHECK(w.frames[0].counts.empty());  // counting is opt-in
 }

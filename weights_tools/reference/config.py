@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "configs")
 
-CONVLSTM_MODES = ("bidirectional", "causal")
+CONVLSTM_MODES = ("bidirectional", "causal", "none")
+REPRESENTATIONS = ("tore", "counts")
 
 
 class ConfigError(ValueError):
@@ -32,8 +33,10 @@ class ModelConfig:
     hidden: int            # ConvLSTM hidden channels
     stages: int
     joints: int
-    convlstm: str          # bidirectional | causal
-    raw: dict              # the JSON object this was read from
+    convlstm: str          # bidirectional | causal | none (the skip block sees the head alone)
+    raw: dict
+    masked_input: bool = True      # False: stage 2 reads the whole input, no stage 1
+    representation: str = "tore"   # or "counts": log(1 + events) per polarity per frame period              # the JSON object this was read from
 
     @property
     def height(self):
@@ -72,6 +75,14 @@ def _get(obj, path, key, kind, default=None):
     return kind(v)
 
 
+def _get_bool(obj, path, key, default):
+    if key not in obj:
+        return default
+    if not isinstance(obj[key], bool):
+        raise ConfigError(f"{path}.{key}: expected true or false, got {obj[key]!r}")
+    return obj[key]
+
+
 def config_from_dict(d, where="config"):
     if not isinstance(d, dict):
         raise ConfigError(f"{where}: expected a JSON object")
@@ -94,6 +105,8 @@ def config_from_dict(d, where="config"):
         joints=_get(p, where + ".pose", "joints", int),
         convlstm=_get(p, where + ".pose", "convlstm", str),
         raw=d,
+        masked_input=_get_bool(p, where + ".pose", "masked_input", True),
+        representation=_get(i, where + ".input", "representation", str, "tore"),
     )
     checks = [
         (cfg.channels >= 1, "input.channels must be >= 1"),
@@ -103,6 +116,9 @@ def config_from_dict(d, where="config"):
         (cfg.n_masks >= 1 and cfg.hidden >= 1 and cfg.stages >= 1 and cfg.joints >= 1,
          "n_masks, hidden, stages and joints must be >= 1"),
         (cfg.convlstm in CONVLSTM_MODES, f"pose.convlstm must be one of {CONVLSTM_MODES}"),
+        (cfg.representation in REPRESENTATIONS, "input.representation must be tore or counts"),
+        (cfg.representation != "tore" or cfg.channels % 2 == 0, "input.channels must be even for TORE (2K planes)"),
+        (cfg.representation != "counts" or cfg.channels == 2, "input.channels must be 2 for counts (one per polarity)"),
         # The U-Net pools 4 times and the pose net divides by 16 before the hourglass.
         (cfg.height >= 16 and cfg.width >= 16, "input is smaller than 16 x 16 after downscale"),
     ]

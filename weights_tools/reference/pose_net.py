@@ -105,8 +105,9 @@ class PoseNet(nn.Module):
             resnet_layer(c64, c64, 3, 1),
             resnet_layer(c64, mid, 4, 2))
         self.mid_hw = head_output_size(cfg.height, cfg.width)
-        self.cl = WindowConvLSTM(mid, cfg.hidden, cfg.convlstm == "bidirectional")
-        self.cl_skip_block = regular_block(mid + cfg.hidden, mid)
+        if cfg.convlstm != "none":
+            self.cl = WindowConvLSTM(mid, cfg.hidden, cfg.convlstm == "bidirectional")
+        self.cl_skip_block = regular_block(mid + (cfg.hidden if cfg.convlstm != "none" else 0), mid)
         lo, hi = cfg.hourglass_widths()
         self.xy_hm_cnns = nn.ModuleList()
         self.zy_hm_cnns = nn.ModuleList()
@@ -126,8 +127,10 @@ class PoseNet(nn.Module):
             x = x.unsqueeze(0)
         b, s = x.shape[:2]
         feats = self.in_cnn(x.reshape(b * s, *x.shape[2:]))
-        cl = self.cl(feats.reshape(b, s, *feats.shape[1:]))
-        feats = self.cl_skip_block(torch.cat([feats, cl.reshape(b * s, *cl.shape[2:])], dim=1))
+        if self.cfg.convlstm != "none":
+            cl = self.cl(feats.reshape(b, s, *feats.shape[1:]))
+            feats = torch.cat([feats, cl.reshape(b * s, *cl.shape[2:])], dim=1)
+        feats = self.cl_skip_block(feats)
         heatmaps = []
         inp = feats
         for t in range(self.cfg.stages):
