@@ -58,11 +58,12 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
   const std::string dir = (std::filesystem::temp_directory_path() / ("yelan-bench-run-" + std::to_string(::getpid()))).string();
   std::filesystem::create_directories(dir);
   std::vector<std::pair<std::string, std::string>> models;  // config, weights
-  if (const auto w = args.value("--weights")) models.push_back({"", *w});
+  if (const auto w = args.value("--weights"))
+    for (const auto& f : cli::split_list(*w)) models.push_back({"", f});
   else
     for (const auto& cfg : cli::split_list(args.value_or("--configs", "small,paper"))) models.push_back({cfg, random_weights(cfg, dir)});
   struct Row {
-    std::string config;
+    std::string config, weights;
     int threads;
     double poses_per_s, p50, p99, tore50, s1_50, s2_50, mask_frac;
   };
@@ -81,7 +82,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       pipe.finish(c.ev.empty() ? 0 : c.ev.back().t, [&](const run::Pose&) { ++n; });
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const auto& s = pipe.stats();
-      rows.push_back({pipe.config_name(), t, double(n) / wall, run::percentile(s.times.tick_ms, 0.5), run::percentile(s.times.tick_ms, 0.99),
+      rows.push_back({pipe.config_name(), wpath, t, double(n) / wall, run::percentile(s.times.tick_ms, 0.5), run::percentile(s.times.tick_ms, 0.99),
                       run::percentile(s.times.tore_ms, 0.5), run::percentile(s.times.stage1_ms, 0.5), run::percentile(s.times.stage2_ms, 0.5),
                       double(s.mask_runs) / double(std::max<std::uint64_t>(1, s.ticks - s.stale))});
       err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s\n";
@@ -92,7 +93,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
     out << "[\n";
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const Row& r = rows[i];
-      out << "  {\"config\": \"" << r.config << "\", \"threads\": " << r.threads << ", \"poses_per_s\": " << r.poses_per_s
+      out << "  {\"config\": \"" << r.config << "\", \"weights\": \"" << r.weights << "\", \"threads\": " << r.threads << ", \"poses_per_s\": " << r.poses_per_s
           << ", \"p50_ms\": " << r.p50 << ", \"p99_ms\": " << r.p99 << ", \"tore_p50_ms\": " << r.tore50
           << ", \"stage1_p50_ms\": " << r.s1_50 << ", \"stage2_p50_ms\": " << r.s2_50
           << ", \"mask_run_fraction\": " << r.mask_frac << ", \"rate\": " << rate << "}" << (i + 1 < rows.size() ? "," : "")

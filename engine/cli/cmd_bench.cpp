@@ -3,6 +3,7 @@
 #include "benchmarks/kernels/bench_kernels.h"
 #include "benchmarks/networks/bench_networks.h"
 #include "benchmarks/run/bench_run.h"
+#include "benchmarks/run/bench_stream.h"
 #include "benchmarks/sim/bench_sim.h"
 #include "benchmarks/train/bench_train.h"
 #include "engine/cli/args.h"
@@ -18,8 +19,10 @@ int cmd_bench(const std::vector<std::string>& args, std::ostream& out, std::ostr
   if (args[0] == "networks") return bench::run_networks_bench(rest, out, err);
   if (args[0] == "sim") return bench::run_sim_bench(rest, out, err);
   if (args[0] == "run") return bench::run_pipeline_bench(rest, out, err);
+  if (args[0] == "early-exit") return bench::run_early_exit_bench(rest, out, err);
+  if (args[0] == "rate-sweep") return bench::run_rate_sweep_bench(rest, out, err);
   if (args[0] == "train") return bench::run_train_bench(rest, out, err);
-  throw UsageError("unknown benchmark suite '" + args[0] + "' (kernels, events, networks, sim, run, train)");
+  throw UsageError("unknown benchmark suite '" + args[0] + "' (kernels, events, networks, sim, run, early-exit, rate-sweep, train)");
 }
 
 }  // namespace yelan::cli

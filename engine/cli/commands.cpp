@@ -99,13 +99,15 @@ const std::vector<Command>& commands() {
        "usage: yelan devices\n"
        "Lists attached DAVIS346/DVXplorer cameras: model, USB bus, address, serial.\n",
        cmd_devices, "the libusb driver (issue 5)"},
-      {"bench", "benchmarks: kernels, events, networks, sim, run, train",
+      {"bench", "benchmarks: kernels, events, networks, sim, run, early-exit, rate-sweep, train",
        "usage: yelan bench kernels [--quick] [--json] [--isa-list avx2,avx512] [--threads-list 1,2]\n"
        "                          [--reps N] [--only NAME] [--chart FILE.svg] [--from RESULTS.json]\n"
        "       yelan bench events [--json]\n"
        "       yelan bench networks [--configs paper,small,tiny] [--threads-list 1,2] [--window W] [--json]\n"
        "       yelan bench sim [--duration 2] [--threads-list 1,2] [--character ben] [--motion 05_04] [--json]\n"
-       "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta 0.99] [--weights W] [--json]\n"
+       "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta 0.99] [--weights W1,W2] [--json]\n"
+       "       yelan bench early-exit --weights W [--values 0.5,...,0.99,1.01] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
+       "       yelan bench rate-sweep --weights W [--values 20,50,100,150,200] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
        "       yelan bench train [--config small] [--stage pose|mask|both] [--batch 1] [--batches 4] [--steps 20]\n"
        "                         [--threads-list 1] [--sim train] [--json] [--no-torch] [--keep-data FILE.h5]\n"
        "\n"
@@ -121,6 +123,9 @@ const std::vector<Command>& commands() {
        "of rendering and the pixel model, and events/s against the real DAVIS346 recording.\n"
        "run: the streaming pipeline per config and thread count: poses/s, per-tick p50/p99 split\n"
        "by stage (TORE, stage 1, stage 2) and the share of ticks that ran stage 1.\n"
+       "early-exit, rate-sweep: the pipeline scored on test-split scenes (simulated once, in memory)\n"
+       "while beta or the pose rate varies: MPJPE (paper protocol and with the depth prior), the share\n"
+       "of ticks that ran stage 1, ms per tick by stage; --chart writes the SVG (and PNG).\n"
        "train: the trainer's step (zero_grad, forward, loss, backward, Adam) in samples/s on batches\n"
        "built as yelan train builds them, against PyTorch 1.13 training the same config from the same\n"
        "initial weights on the same batches (ratio ours/torch; the initial losses of both show it).\n",

@@ -1,0 +1,44 @@
+// The streaming pipeline (engine/run/pipeline.h) scored on simulated scenes: events from the
+// simulator go through PosePipeline exactly as `yelan run` feeds them, and each pose is
+// compared with the simulator's label at the pose's time. Two depths: the paper protocol
+// (the prediction rescaled to the true head depth) and as deployed (the body-height prior).
+// Also what the run cost: the share of ticks that ran stage 1 and the time per tick by stage.
+#pragma once
+#include <cstdint>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "camera/sim/simulator.h"
+#include "engine/run/pipeline.h"
+#include "engine/train/metrics.h"
+
+namespace yelan::run {
+
+// Scenes simulated once (events in memory, the simulator kept for its labels), so a sweep
+// runs the pipeline many times on identical events and times the pipeline alone.
+struct SimulatedScene {
+  std::unique_ptr<camera::sim::Simulator> sim;
+  std::vector<camera::Event> events;
+  double warmup_s = 0.1;           // poses before this (TORE without history) are not scored
+};
+
+// Scene i runs with a seed drawn from `seed` and i, for warmup_s + seconds.
+std::vector<SimulatedScene> simulate_scenes(const std::vector<camera::sim::SimSpec>& scenes, std::uint64_t seed,
+                                            double seconds, double warmup_s, std::ostream& progress);
+
+struct StreamEvalResult {
+  train::PoseScores paper;         // head depth from the label (the paper's protocol)
+  train::PoseScores deployed;      // head depth from the pipeline's estimate
+  std::uint64_t ticks = 0, mask_runs = 0, stale = 0, poses_scored = 0;
+  double mask_run_fraction = 0;    // of the ticks that ran stage 2
+  double ms_per_tick = 0;          // mean over ticks, all stages
+  double tore_ms = 0, stage1_ms = 0, stage2_ms = 0;  // mean per tick (stage 1: over every tick)
+  double wall_s = 0;               // pipeline time alone
+};
+
+StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,
+                                 const RunOptions& run);
+
+}  // namespace yelan::run
