@@ -8,6 +8,7 @@ const std::vector<Command>& commands() {
   static const std::vector<Command> table = {
       {"run", "events -> 3D poses, live or from a file",
        "usage: yelan run --weights W FILE [--rate 50] [--out poses.csv|.json|.h5] [--beta 0.99]\n"
+       "       yelan run --weights W --camera [SERIAL] [--duration 10s] [same options]\n"
        "                 [--no-early-exit] [--height-mm 1700 | --depth-mm Z] [--keep-empty]\n"
        "                 [--threads T] [--stats-json S.json] [--viz DIR [--viz-every N]]\n"
        "Per event the TORE volume; at each tick (--rate per second) stage 1 with early exit (the\n"
@@ -17,6 +18,10 @@ const std::vector<Command>& commands() {
        "(or a fixed --depth-mm). Ticks without events repeat the last pose (causal models).\n"
        "CSV columns: t_us, x,y,z of the 13 joints in SPEC order, confidence, mask_ran.\n"
        "A file that ends mid-packet stops the run with a message; every pose computed is written.\n"
+       "--camera: live from the attached DAVIS346/DVXplorer (the first, or the one with SERIAL;\n"
+       "see `yelan devices`) until --duration or Ctrl-C (exit 0). CSV rows are written and\n"
+       "flushed as poses are computed; a camera that stops sending (unplugged, USB error) ends\n"
+       "the run with a message and exit 1, every pose computed written.\n"
        "--viz DIR: a PNG per pose (TORE and mask, projected skeleton, side view); DIR/run.mp4\n"
        "when ffmpeg is installed.\n",
        cmd_run, "streaming pose estimation (issue 8)"},

@@ -37,7 +37,7 @@ int cmd_train(const std::vector<std::string>& args, std::ostream& out, std::ostr
 // engine/cli/cmd_eval.cpp: evaluation of a weights file on simulated scenes.
 int cmd_eval(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
-// engine/cli/cmd_run.cpp: streaming pose estimation from event files (engine/run).
+// engine/cli/cmd_run.cpp: streaming pose estimation from event files or a camera (engine/run).
 int cmd_run(const std::vector<std::string>& args, std::ostream& out, std::ostream& err);
 
 }  // namespace yelan::cli

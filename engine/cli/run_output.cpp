@@ -1,0 +1,148 @@
+#include "engine/cli/run_output.h"
+
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+#include "camera/io/event_writer.h"
+#include "camera/io/h5.h"
+#include "engine/cli/args.h"
+#include "engine/threads.h"
+
+namespace yelan::cli {
+namespace {
+
+std::string extension(const std::string& path) { return std::filesystem::path(path).extension().string(); }
+
+}  // namespace
+
+void check_pose_output(const std::string& path) {
+  const std::string ext = extension(path);
+  if (ext != ".csv" && ext != ".json" && ext != ".h5") throw UsageError("--out " + path + ": expected .csv, .json or .h5");
+}
+
+void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
+  check_pose_output(path);
+  const std::string ext = extension(path);
+  camera::TempFile tmp(path);
+  if (ext == ".csv") {
+    std::ofstream o(tmp.path());
+    o << run::pose_csv_header() << "\n";
+    for (const auto& p : poses) o << run::pose_csv_row(p) << "\n";
+    if (!o.flush()) throw std::runtime_error("cannot write " + tmp.path());
+  } else if (ext == ".json") {
+    std::ofstream o(tmp.path());
+    o << "[";
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      const auto& p = poses[i];
+      o << (i ? ",\n " : "\n ") << "{\"t_us\": " << p.t_us << ", \"joints_mm\": [";
+      for (int j = 0; j < 13; ++j)
+        o << (j ? ", " : "") << "[" << p.joints_mm[j][0] << ", " << p.joints_mm[j][1] << ", " << p.joints_mm[j][2] << "]";
+      o << "], \"confidence\": " << p.confidence << ", \"mask_ran\": " << (p.mask_ran ? 1 : 0)
+        << ", \"stale\": " << (p.stale ? "true" : "false") << "}";
+    }
+    o << "\n]\n";
+    if (!o.flush()) throw std::runtime_error("cannot write " + tmp.path());
+  } else {
+    namespace h5 = camera::h5;
+    h5::H5Id f = h5::create_file(tmp.path());
+    auto put = [&](const char* name, hid_t file_type, hid_t mem_type, std::vector<hsize_t> dims, const void* data) {
+      h5::H5Id space = h5::check(H5Screate_simple(int(dims.size()), dims.data(), nullptr), name);
+      h5::H5Id props = h5::untimed_dataset_props();
+      h5::H5Id ds = h5::check(H5Dcreate2(f.get(), name, file_type, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT), name);
+      if (!poses.empty()) h5::check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+    };
+    std::vector<std::int64_t> t;
+    std::vector<float> j, c;
+    std::vector<std::uint8_t> m;
+    for (const auto& p : poses) {
+      t.push_back(p.t_us);
+      for (const auto& q : p.joints_mm) j.insert(j.end(), q.begin(), q.end());
+      c.push_back(p.confidence);
+      m.push_back(p.mask_ran);
+    }
+    const hsize_t n = poses.size();
+    put("t_us", H5T_STD_I64LE, H5T_NATIVE_INT64, {n}, t.data());
+    put("joints_mm", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n, 13, 3}, j.data());
+    put("confidence", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n}, c.data());
+    put("mask_ran", H5T_STD_U8LE, H5T_NATIVE_UINT8, {n}, m.data());
+    f.reset();
+  }
+  tmp.commit();
+}
+
+RunSession::RunSession(const RunSetup& setup, int sensor_width, int sensor_height, bool live)
+    : setup_(setup), live_(live), pipe_(setup.weights, sensor_width, sensor_height, setup.options) {
+  if (setup_.viz_dir) viz_.emplace(*setup_.viz_dir, sensor_width, sensor_height, setup_.viz_every);
+  if (live_ && setup_.out && extension(*setup_.out) == ".csv") {
+    live_csv_.open(*setup_.out, std::ios::trunc);
+    live_csv_ << run::pose_csv_header() << "\n" << std::flush;
+    if (!live_csv_) throw std::runtime_error("cannot write " + *setup_.out);
+  }
+}
+
+void RunSession::add(const run::Pose& p) {
+  ++poses_written_;
+  if (live_csv_.is_open()) {
+    live_csv_ << run::pose_csv_row(p) << "\n" << std::flush;
+    if (!live_csv_) throw std::runtime_error("cannot write " + *setup_.out + " (disk full?)");
+  } else if (setup_.out) {
+    kept_.push_back(p);
+  }
+  if (viz_) viz_->add(p, pipe_);
+}
+
+void RunSession::push(std::span<const camera::Event> events) {
+  pipe_.push(events, [this](const run::Pose& p) { add(p); });
+}
+
+void RunSession::finish(std::int64_t t_us) {
+  pipe_.finish(t_us, [this](const run::Pose& p) { add(p); });
+}
+
+double RunSession::stage1_share() const {
+  const run::RunStats& s = pipe_.stats();
+  return s.ticks ? double(s.mask_runs) / double(s.ticks - s.stale + 1e-9) : 0;
+}
+
+void RunSession::write_outputs(double wall_s, std::ostream& err) {
+  if (outputs_written_) return;
+  outputs_written_ = true;
+  if (live_csv_.is_open()) {
+    live_csv_.close();
+    if (!live_csv_) throw std::runtime_error("cannot write " + *setup_.out);
+  } else if (setup_.out) {
+    write_poses(*setup_.out, kept_);
+  }
+  if (viz_) err << viz_->finish() << " pictures in " << *setup_.viz_dir << "\n";
+  if (setup_.stats_json) {
+    const run::RunStats& s = pipe_.stats();
+    std::ofstream f(*setup_.stats_json);
+    f << "{\"poses_per_s\": " << double(s.poses) / wall_s << ", \"p50_ms\": " << run::percentile(s.times.tick_ms, 0.5)
+      << ", \"p99_ms\": " << run::percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << stage1_share()
+      << ", \"threads\": " << yelan::threads() << ", \"config\": \"" << pipe_.config_name() << "\", \"poses\": " << s.poses
+      << ", \"ticks\": " << s.ticks << ", \"stale_ticks\": " << s.stale << "}\n";
+  }
+}
+
+void RunSession::report(const std::string& source, double wall_s, std::ostream& out) const {
+  const run::RunStats& s = pipe_.stats();
+  const run::StageTimes& t = s.times;
+  const auto p50_p99 = [](const std::vector<double>& v) {
+    std::ostringstream o;
+    o << std::fixed << std::setprecision(2) << run::percentile(v, 0.5) << "/" << run::percentile(v, 0.99);
+    return o.str();
+  };
+  out << source << ": " << s.events << " events, " << s.poses << " poses at " << setup_.options.rate_hz
+      << " per second (" << (pipe_.causal() ? "causal" : "windowed bidirectional") << ", config " << pipe_.config_name()
+      << "), " << std::fixed << std::setprecision(1) << double(s.poses) / wall_s
+      << " poses/s on this machine; stage 1 ran on " << 100 * stage1_share() << "% of the ticks with events (beta "
+      << std::setprecision(3) << setup_.options.beta << "), " << s.stale << " ticks without events repeated the last pose\n"
+      << "per tick ms p50/p99: TORE " << p50_p99(t.tore_ms) << ", stage 1 " << p50_p99(t.stage1_ms) << ", stage 2 "
+      << p50_p99(t.stage2_ms) << ", whole tick " << p50_p99(t.tick_ms) << "\n";
+  out.unsetf(std::ios::floatfield);
+  out << std::setprecision(6);
+}
+
+}  // namespace yelan::cli
