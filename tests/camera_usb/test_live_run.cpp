@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 
+#include "camera/io/h5.h"
 #include "camera/usb/davis_decoder.h"
 #include "camera/usb/davis_device.h"
 #include "camera/usb/fake_transport.h"
@@ -111,7 +112,7 @@ TEST_CASE("live run: a camera unplugged mid-run keeps every pose, names the fail
   const Expected want = expected_rows(dir / "w.h5", bufs, bufs.size());
   REQUIRE(want.events == 9 * 301);
   REQUIRE(want.rows.size() >= 10);
-  for (const char* name : {"p.csv", "p.json"}) {
+  for (const char* name : {"p.csv", "p.json", "p.h5"}) {
     INFO(name);
     Live cam;
     for (const auto& b : bufs) cam.t.queue_buffer(b);
@@ -135,55 +136,66 @@ TEST_CASE("live run: a camera unplugged mid-run keeps every pose, names the fail
     CHECK(contains(out.str(), "fake DAVIS346: 2709 events, " + std::to_string(want.rows.size()) + " poses"));
     if (std::string(name) == "p.csv") {
       CHECK(data_lines(slurp(dir / name)) == want.rows);
-    } else {
+    } else if (std::string(name) == "p.json") {
       const std::string json = slurp(dir / name);
       std::size_t n = 0;
       for (auto at = json.find("\"t_us\""); at != std::string::npos; at = json.find("\"t_us\"", at + 1)) ++n;
       CHECK(n == want.rows.size());
+    } else {
+      namespace h5 = yelan::camera::h5;
+      const h5::H5Id f = h5::open_file(dir / name);
+      const h5::H5Id ds = h5::check(H5Dopen2(f.get(), "t_us", H5P_DEFAULT), "t_us");
+      REQUIRE(h5::shape(ds.get()) == std::vector<hsize_t>{want.rows.size()});
+      std::vector<std::int64_t> t(want.rows.size());
+      h5::read_rows(ds.get(), H5T_NATIVE_INT64, 0, t.size(), t.data());
+      for (std::size_t i = 0; i < t.size(); ++i) CHECK(std::to_string(t[i]) == want.rows[i].substr(0, want.rows[i].find(',')));
     }
   }
 }
 
-TEST_CASE("live run: SIGINT stops it with exit 0, and the CSV holds each pose as soon as it is computed", "[usb][run]") {
+TEST_CASE("live run: SIGINT or SIGTERM stops it with exit 0, and the CSV holds each pose as soon as it is computed", "[usb][run]") {
   yelan::test::CliTempDir dir("live-sigint");
   REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "3", "-o", dir / "w.h5"}).code == 0);
   const auto bufs = buffers(12);
-  const Expected want = expected_rows(dir / "w.h5", bufs, 7);  // Ctrl-C after 7 buffers
+  const Expected want = expected_rows(dir / "w.h5", bufs, 7);  // stopped after 7 buffers
   REQUIRE(!want.rows.empty());
-  Live cam;
-  for (const auto& b : bufs) cam.t.queue_buffer(b);
-  yelan::cli::LiveRun live;
-  live.setup.weights = dir / "w.h5";
-  live.setup.out = dir / "p.csv";
-  live.camera_name = "fake DAVIS346";
-  std::vector<std::string> rows_when_interrupted;
-  int asked = 0;
-  std::ostringstream out, err;
-  int code = -1;
-  {
-    yelan::cli::InterruptGuard guard;
-    auto until = yelan::cli::until_stopped(std::nullopt);
-    code = yelan::cli::run_live(cam.d, cam.t, live, [&] {
-      if (++asked == 8) {
-        rows_when_interrupted = data_lines(slurp(dir / "p.csv"));
-        std::raise(SIGINT);  // what Ctrl-C does; the guard turns it into a flag
-      }
-      return until();
-    }, out, err);
-    CHECK(yelan::cli::InterruptGuard::interrupted());
+  for (int sig : {SIGINT, SIGTERM}) {
+    INFO(sig);
+    Live cam;
+    for (const auto& b : bufs) cam.t.queue_buffer(b);
+    yelan::cli::LiveRun live;
+    live.setup.weights = dir / "w.h5";
+    live.setup.out = dir / ("p" + std::to_string(sig) + ".csv");
+    live.camera_name = "fake DAVIS346";
+    std::vector<std::string> rows_when_interrupted;
+    int asked = 0;
+    std::ostringstream out, err;
+    int code = -1;
+    {
+      yelan::cli::InterruptGuard guard;
+      auto until = yelan::cli::until_stopped(std::nullopt);
+      code = yelan::cli::run_live(cam.d, cam.t, live, [&] {
+        if (++asked == 8) {
+          rows_when_interrupted = data_lines(slurp(*live.setup.out));
+          std::raise(sig);  // what Ctrl-C or kill does; the guard turns it into a flag
+        }
+        return until();
+      }, out, err);
+      CHECK(yelan::cli::InterruptGuard::interrupted());
+    }
+    INFO(err.str());
+    CHECK(code == 0);
+    CHECK(asked == 8);
+    CHECK(cam.t.pending_buffers() == 5);  // the 7 polled buffers were all the pipeline saw
+    CHECK_FALSE(cam.t.bulk_running());
+    CHECK_FALSE(contains(err.str(), "stopped sending"));
+    const auto rows = data_lines(slurp(*live.setup.out));
+    CHECK(rows == want.rows);
+    // Rows were on disk before the run ended; the end adds only the ticks up to the last event.
+    REQUIRE(!rows_when_interrupted.empty());
+    REQUIRE(rows_when_interrupted.size() <= rows.size());
+    CHECK(std::equal(rows_when_interrupted.begin(), rows_when_interrupted.end(), rows.begin()));
   }
-  INFO(err.str());
-  CHECK(code == 0);
-  CHECK(asked == 8);
-  CHECK(cam.t.pending_buffers() == 5);  // the 7 polled buffers were all the pipeline saw
-  CHECK_FALSE(cam.t.bulk_running());
-  CHECK_FALSE(contains(err.str(), "stopped sending"));
-  const auto rows = data_lines(slurp(dir / "p.csv"));
-  CHECK(rows == want.rows);
-  // Rows were on disk before the run ended; the end adds only the ticks up to the last event.
-  REQUIRE(!rows_when_interrupted.empty());
-  REQUIRE(rows_when_interrupted.size() <= rows.size());
-  CHECK(std::equal(rows_when_interrupted.begin(), rows_when_interrupted.end(), rows.begin()));
 }
 
 TEST_CASE("yelan run --camera without a camera exits 1 with a clear message; --camera with a FILE is a usage error", "[usb][run]") {
