@@ -48,13 +48,14 @@ int run_live(usb::CameraDevice& device, usb::Transport& transport, const LiveRun
   RunSession session(live.setup, device.width(), device.height(), true);
   PipelineFeed feed(session);
   const auto start = Clock::now();
-  auto last_line = start;
+  auto last_line = start - std::chrono::seconds(1);  // the first line at once: it is running
   auto wall_s = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   auto ask = [&] {
     if (live.progress && Clock::now() - last_line >= std::chrono::milliseconds(500)) {
       last_line = Clock::now();
+      const double wall = wall_s();
       err << "\r" << session.poses() << " poses, " << std::fixed << std::setprecision(1)
-          << double(session.poses()) / wall_s() << " poses/s, stage 1 on " << std::setprecision(0)
+          << (wall > 0 ? double(session.poses()) / wall : 0.0) << " poses/s, stage 1 on " << std::setprecision(0)
           << 100 * session.stage1_share() << "% of ticks, " << feed.events << " events   " << std::flush;
       err << std::defaultfloat << std::setprecision(6);
     }

@@ -121,6 +121,7 @@ TEST_CASE("live run: a camera unplugged mid-run keeps every pose, names the fail
     live.setup.weights = dir / "w.h5";
     live.setup.out = dir / name;
     live.camera_name = "fake DAVIS346";
+    live.progress = std::string(name) == "p.csv";  // as on a terminal
     int asked = 0;
     std::ostringstream out, err;
     const int code = yelan::cli::run_live(cam.d, cam.t, live, [&] { return ++asked < 1000; }, out, err);
@@ -132,6 +133,12 @@ TEST_CASE("live run: a camera unplugged mid-run keeps every pose, names the fail
     std::snprintf(at, sizeof at, "%.3f s", double(want.last_t) * 1e-6);
     CHECK(contains(e, "the camera stopped sending after 2709 events at t=" + std::string(at) + ": "));
     CHECK(contains(e, "device disconnected (LIBUSB_TRANSFER_NO_DEVICE)"));
+    if (live.progress) {
+      CHECK(e.rfind("\r0 poses, 0.0 poses/s, stage 1 on 0% of ticks, 0 events", 0) == 0);
+      CHECK(contains(e, "events   \n"));  // the status line ends before the messages
+    } else {
+      CHECK_FALSE(contains(e, "\r"));
+    }
     CHECK(contains(e, "the " + std::to_string(want.rows.size()) + " poses computed are written to " + (dir / name)));
     CHECK(contains(out.str(), "fake DAVIS346: 2709 events, " + std::to_string(want.rows.size()) + " poses"));
     if (std::string(name) == "p.csv") {
