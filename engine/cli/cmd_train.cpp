@@ -48,7 +48,7 @@ std::vector<sim::SimSpec> scenes_from(const std::string& text) {
 int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("train", argv,
                {"--stage", "--config", "--sim", "--val-sim", "--data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
-                "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--threads", "--patience",
+                "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs"},
                {"--occlusion", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
@@ -81,6 +81,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.init_weights = a.value_or("--init", "");
   spec.checkpoint_minutes = std::stod(a.value_or("--checkpoint-minutes", "10"));
   spec.max_minutes = std::stod(a.value_or("--max-minutes", "0"));
+  spec.max_cpu_minutes = std::stod(a.value_or("--max-cpu-minutes", "0"));
   spec.resume = a.flag("--resume");
   spec.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   if (const auto t = a.value("--threads")) {

@@ -43,7 +43,7 @@ const std::vector<Command>& commands() {
        "usage: yelan train --stage mask|pose --config NAME|FILE --sim PRESETS|train -o OUTDIR\n"
        "                   [--steps 1000] [--batch 1] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
        "                   [--occlusion] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
-       "                   [--checkpoint-minutes 10] [--max-minutes M] [--resume] [--threads T]\n"
+       "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
        "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
        "at each frame, downscaled to the config's input. mask: the U-Net learns the current and\n"
        "N-1 future masks. pose: the pose net learns the normalised 3D joints from masked TORE\n"

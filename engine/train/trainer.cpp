@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -257,6 +258,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     err << "this run had already stopped early (no better validation loss for " << spec.patience << " epochs)\n";
   }
   const std::int64_t first_step = st.step;
+  const std::clock_t cpu_start = std::clock();
   while (st.step < spec.steps && !result.early_stopped) {
     const auto t0 = std::chrono::steady_clock::now();
     builder.clear();
@@ -316,7 +318,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     if (epoch_end)
       err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
           << ", validation " << val << " (best " << st.best_val << "), " << sps << " samples/s\n";
-    const bool out_of_time = spec.max_minutes > 0 && wall > spec.max_minutes * 60;
+    const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+    const bool out_of_time =
+        (spec.max_minutes > 0 && wall > spec.max_minutes * 60) || (spec.max_cpu_minutes > 0 && cpu > spec.max_cpu_minutes * 60);
     if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_ckpt).count() > spec.checkpoint_minutes * 60 ||
         out_of_time)
       checkpoint();

@@ -37,6 +37,8 @@ struct TrainSpec {
   double frame_hz = 50;
   bool progress_tty = false;        // a live progress line (else one line per epoch)
   double max_minutes = 0;           // stop (with a checkpoint) after this long; 0: no limit
+  double max_cpu_minutes = 0;       // the same in CPU time of this process (all threads): a
+                                    // budget that other work on a shared machine does not eat
 };
 
 struct TrainResult {
