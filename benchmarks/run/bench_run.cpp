@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <unistd.h>
 
 #include "camera/sim/presets.h"
@@ -43,7 +44,7 @@ std::string random_weights(const std::string& config, const std::string& dir) {
 }  // namespace
 
 int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights"}, {"--json"});
+  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights"}, {"--json", "--no-torch"});
   args.expect_positionals(0, 0);
   const double rate = std::stod(args.value_or("--rate", "50")), seconds = std::stod(args.value_or("--seconds", "2"));
   const double beta = std::stod(args.value_or("--beta", "0.99"));
@@ -66,6 +67,8 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
     std::string config, weights;
     int threads;
     double poses_per_s, p50, p99, tore50, s1_50, s2_50, mask_frac;
+    double nets_ms = 0;                    // mean per tick of stage 1 + stage 2 (the networks' work)
+    double torch_ms = -1;                  // the same work in PyTorch (benchmarks/torch/pipeline_bench.py)
   };
   std::vector<Row> rows;
   const int saved = yelan::threads();
@@ -85,9 +88,31 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       rows.push_back({pipe.config_name(), wpath, t, double(n) / wall, run::percentile(s.times.tick_ms, 0.5), run::percentile(s.times.tick_ms, 0.99),
                       run::percentile(s.times.tore_ms, 0.5), run::percentile(s.times.stage1_ms, 0.5), run::percentile(s.times.stage2_ms, 0.5),
                       double(s.mask_runs) / double(std::max<std::uint64_t>(1, s.ticks - s.stale))});
+      double nets = 0;
+      for (std::size_t i = 0; i < s.times.stage1_ms.size(); ++i) nets += s.times.stage1_ms[i] + s.times.stage2_ms[i];
+      rows.back().nets_ms = nets / double(std::max<std::size_t>(1, s.times.stage1_ms.size()));
       err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s\n";
     }
   set_threads(saved);
+  // PyTorch after ours, never both thread pools at once.
+  if (!args.flag("--no-torch")) {
+    if (std::system("/usr/bin/python3 -c 'import torch' >/dev/null 2>&1") != 0) {
+      err << "no PyTorch comparison: /usr/bin/python3 cannot import torch\n";
+    } else {
+      for (Row& r : rows) {
+        std::ostringstream cmd;
+        cmd << "cd '" << YELAN_SOURCE_DIR << "' && /usr/bin/python3 benchmarks/torch/pipeline_bench.py --weights '" << r.weights
+            << "' --threads " << r.threads << " --mask-fraction " << r.mask_frac << " 2>/dev/null";
+        if (r.weights.find('\'') != std::string::npos) continue;
+        FILE* p = ::popen(cmd.str().c_str(), "r");
+        if (!p) continue;
+        char line[256];
+        while (std::fgets(line, sizeof line, p)) std::sscanf(line, "ms_per_tick %lf", &r.torch_ms);
+        ::pclose(p);
+        err << "  PyTorch " << r.config << " x" << r.threads << ": " << r.torch_ms << " ms per tick of network work\n";
+      }
+    }
+  }
   std::filesystem::remove_all(dir);
   if (args.flag("--json")) {
     out << "[\n";
@@ -96,17 +121,19 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       out << "  {\"config\": \"" << r.config << "\", \"weights\": \"" << r.weights << "\", \"threads\": " << r.threads << ", \"poses_per_s\": " << r.poses_per_s
           << ", \"p50_ms\": " << r.p50 << ", \"p99_ms\": " << r.p99 << ", \"tore_p50_ms\": " << r.tore50
           << ", \"stage1_p50_ms\": " << r.s1_50 << ", \"stage2_p50_ms\": " << r.s2_50
-          << ", \"mask_run_fraction\": " << r.mask_frac << ", \"rate\": " << rate << "}" << (i + 1 < rows.size() ? "," : "")
-          << "\n";
+          << ", \"mask_run_fraction\": " << r.mask_frac << ", \"rate\": " << rate << ", \"nets_ms_per_tick\": " << r.nets_ms;
+      if (r.torch_ms > 0) out << ", \"torch_nets_ms_per_tick\": " << r.torch_ms << ", \"ours_vs_torch\": " << r.torch_ms / r.nets_ms;
+      out << "}" << (i + 1 < rows.size() ? "," : "") << "\n";
     }
     out << "]\n";
     return 0;
   }
-  out << "config   threads  poses/s  tick p50 ms  p99 ms  TORE p50  stage1 p50  stage2 p50  stage 1 ran\n";
+  out << "config   threads  poses/s  tick p50 ms  p99 ms  TORE p50  stage1 p50  stage2 p50  stage 1 ran  nets ms/tick  PyTorch  ours/PyTorch\n";
   for (const Row& r : rows) {
-    char line[256];
-    std::snprintf(line, sizeof line, "%-8s %7d %8.1f %12.2f %7.2f %9.2f %11.2f %11.2f %10.0f%%\n", r.config.c_str(), r.threads,
-                  r.poses_per_s, r.p50, r.p99, r.tore50, r.s1_50, r.s2_50, 100 * r.mask_frac);
+    char line[320];
+    std::snprintf(line, sizeof line, "%-8s %7d %8.1f %12.2f %7.2f %9.2f %11.2f %11.2f %10.0f%% %13.2f %8.2f %12.2fx\n",
+                  r.config.c_str(), r.threads, r.poses_per_s, r.p50, r.p99, r.tore50, r.s1_50, r.s2_50, 100 * r.mask_frac,
+                  r.nets_ms, r.torch_ms, r.torch_ms > 0 ? r.torch_ms / r.nets_ms : 0.0);
     out << line;
   }
   return 0;

@@ -110,7 +110,7 @@ const std::vector<Command>& commands() {
        "       yelan bench events [--json]\n"
        "       yelan bench networks [--configs paper,small,tiny] [--threads-list 1,2] [--window W] [--json]\n"
        "       yelan bench sim [--duration 2] [--threads-list 1,2] [--character ben] [--motion 05_04] [--json]\n"
-       "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta 0.99] [--weights W1,W2] [--json]\n"
+       "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta 0.99] [--weights W1,W2] [--no-torch] [--json]\n"
        "       yelan bench early-exit --weights W [--values 0.5,...,0.99,1.01] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
        "       yelan bench rate-sweep --weights W [--values 20,50,100,150,200] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
        "       yelan bench train [--config small] [--stage pose|mask|both] [--batch 1] [--batches 4] [--steps 20]\n"
