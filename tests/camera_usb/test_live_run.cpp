@@ -18,6 +18,7 @@
 #include "engine/cli/camera_open.h"
 #include "engine/cli/run_live.h"
 #include "engine/run/pipeline.h"
+#include "fake_camera.h"
 #include "usb_test_util.h"
 
 using namespace yelan::camera::usb;
@@ -33,13 +34,7 @@ using yelan::test::usb::wrap;
 
 namespace {
 
-FakeTransport fake_davis346() {
-  FakeTransport t;
-  t.set_config(module::sysinfo, sysinfo::chip_identifier, 4);
-  t.set_config(module::dvs, dvs::size_columns, 346);
-  t.set_config(module::dvs, dvs::size_rows, 260);
-  return t;
-}
+FakeTransport fake_davis346() { return yelan::test::usb::fake_davis346_cli(); }
 
 // USB buffers of 32.768 ms each (one timestamp wrap apart), 301 events each at odd places.
 std::vector<std::vector<std::uint8_t>> buffers(int n) {
@@ -98,10 +93,7 @@ struct Live {
   }
 };
 
-bool camera_attached() {
-  const char* v = std::getenv("YELAN_CAMERA_ATTACHED");
-  return v && *v && std::string(v) != "0";
-}
+using yelan::test::usb::camera_attached;
 
 }  // namespace
 

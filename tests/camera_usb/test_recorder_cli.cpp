@@ -14,6 +14,7 @@
 #include "camera/usb/protocol.h"
 #include "camera/usb/recorder.h"
 #include "engine/cli/cli.h"
+#include "fake_camera.h"
 #include "usb_test_util.h"
 #include "cli_util.h"
 
@@ -28,13 +29,7 @@ using yelan::test::usb::wrap;
 
 namespace {
 
-FakeTransport fake_davis346() {
-  FakeTransport t;
-  t.set_config(module::sysinfo, sysinfo::chip_identifier, 4);
-  t.set_config(module::dvs, dvs::size_columns, 346);
-  t.set_config(module::dvs, dvs::size_rows, 260);
-  return t;
-}
+FakeTransport fake_davis346() { return yelan::test::usb::fake_davis346_cli(); }
 
 struct CollectingWriter : yelan::camera::EventWriter {
   std::vector<Event> events;
@@ -43,11 +38,7 @@ struct CollectingWriter : yelan::camera::EventWriter {
   void close() override { ++closes; }
 };
 
-// No camera is attached to the machines that run this suite unless the user says so.
-bool camera_attached() {
-  const char* v = std::getenv("YELAN_CAMERA_ATTACHED");
-  return v && *v && std::string(v) != "0";
-}
+using yelan::test::usb::camera_attached;
 
 using yelan::test::CliResult;
 CliResult cli(std::vector<std::string> argv) { return yelan::test::run_cli(std::move(argv)); }
