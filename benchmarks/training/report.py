@@ -49,8 +49,15 @@ def collect(results, spec, group):
     for m in spec[group]:
         i = m["id"]
         ev_path = os.path.join(results, f"eval-{i}.json")
+        log_path = os.path.join(results, f"log-{i}.csv")
         if not os.path.exists(ev_path):
-            print(f"report: no {ev_path} yet; {i} left out", file=sys.stderr)
+            if os.path.exists(log_path):  # a run still going or stopped: its progress, no scores
+                row = dict(m, training=training_of(log_path), speed=None, speed_exit=None, mpjpe_mm=None, pck150=None,
+                           auc=None, mpjpe_root_mm=None, mpjpe_clear_mm=None, mpjpe_occluded_mm=None, mask_iou=None)
+                row["name"] += " (not finished: no evaluation yet)"
+                out.append(row)
+            else:
+                print(f"report: no {ev_path} yet; {i} left out", file=sys.stderr)
             continue
         ev = load_json(ev_path)
         occ = ev.get("by_condition", {}).get("occlusion", {})
@@ -59,7 +66,7 @@ def collect(results, spec, group):
             "mpjpe_mm": ev["mpjpe_mm"], "pck150": ev["pck150"], "auc": ev["auc"], "mpjpe_root_mm": ev["mpjpe_root_mm"],
             "mpjpe_clear_mm": occ.get("clear", {}).get("mpjpe_mm"), "mpjpe_occluded_mm": occ.get("occluded", {}).get("mpjpe_mm"),
             "mask_iou": ev.get("mask_iou"), "frames": ev["frames"], "scenes": ev.get("scenes"),
-            "training": training_of(os.path.join(results, f"log-{i}.csv")),
+            "training": training_of(log_path) if os.path.exists(log_path) else None,
             "speed": speed_of(os.path.join(results, f"speed-{i}.json")),
             "speed_exit": speed_of(os.path.join(results, f"speed-{i}-exit.json")),
         })
@@ -77,7 +84,8 @@ def table(rows, sizes=False):
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for r in rows:
         t = r["training"]
-        train = f"{t['steps']} steps, {t['minutes']:.0f} min (best val {t['best_val']:.3f} at {t['best_step']})" if t else "-"
+        # wall minutes are not shown: runs shared the cores and resumed runs restart the clock
+        train = f"{t['steps']} steps (best validation {t['best_val']:.3f} at step {t['best_step']})" if t else "-"
         iou = fmt(r["mask_iou"], 3) if r["mask_iou"] else "-"
         line = (f"| {r['id']} | {r['name']} | {fmt(r['mpjpe_mm'])} | {fmt(r['pck150'], 3)} | {fmt(r['auc'], 3)} | "
                 f"{fmt(r['mpjpe_root_mm'])} | {fmt(r['mpjpe_clear_mm'])} / {fmt(r['mpjpe_occluded_mm'])} | {iou} | {train} |")
@@ -167,15 +175,16 @@ def main():
     with open(os.path.join(a.results, "summary.json"), "w") as f:
         json.dump({"comparison": cmp_rows, "sizes": size_rows}, f, indent=1)
     print(text)
-    if size_rows:
-        best = min(r["mpjpe_mm"] for r in size_rows)
-        ok = [r for r in size_rows if r["mpjpe_mm"] <= 1.1 * best and r.get("speed")]
+    scored = [r for r in size_rows if r["mpjpe_mm"] is not None]
+    if scored:
+        best = min(r["mpjpe_mm"] for r in scored)
+        ok = [r for r in scored if r["mpjpe_mm"] <= 1.1 * best and r.get("speed")]
         if ok:
             pick = min(ok, key=lambda r: r["speed"]["ms_per_pose"])
             print(f"default: {pick['id']} ({pick['name']}): {pick['mpjpe_mm']:.1f} mm, best {best:.1f} mm, "
                   f"{pick['speed']['ms_per_pose']:.1f} ms/pose")
         os.makedirs(a.charts, exist_ok=True)
-        frontier_svg(size_rows, os.path.join(a.charts, "frontier-1t.svg"))
+        frontier_svg(scored, os.path.join(a.charts, "frontier-1t.svg"))
 
 
 if __name__ == "__main__":
