@@ -100,10 +100,10 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       err << "no PyTorch comparison: /usr/bin/python3 cannot import torch\n";
     } else {
       for (Row& r : rows) {
+        if (r.weights.find('\'') != std::string::npos) continue;  // not quotable in the shell line
         std::ostringstream cmd;
         cmd << "cd '" << YELAN_SOURCE_DIR << "' && /usr/bin/python3 benchmarks/torch/pipeline_bench.py --weights '" << r.weights
             << "' --threads " << r.threads << " --mask-fraction " << r.mask_frac << " 2>/dev/null";
-        if (r.weights.find('\'') != std::string::npos) continue;
         FILE* p = ::popen(cmd.str().c_str(), "r");
         if (!p) continue;
         char line[256];

@@ -30,12 +30,12 @@ BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource sourc
   if (source_ == MaskSource::net) one_.resize(cfg.window, cfg.channels, h, w);
 }
 
-std::vector<float> input_planes(const ModelConfig& cfg, const camera::sim::SimFrame& f) {
+const std::vector<float>& input_planes(const ModelConfig& cfg, const camera::sim::SimFrame& f, std::vector<float>& scratch) {
   if (cfg.representation == "tore") return f.tore;
   if (f.counts.empty()) throw std::logic_error("counts input, but the simulator stream did not count events");
-  std::vector<float> v(f.counts.size());
-  for (std::size_t i = 0; i < v.size(); ++i) v[i] = std::log1p(f.counts[i]);
-  return v;
+  scratch.resize(f.counts.size());
+  for (std::size_t i = 0; i < scratch.size(); ++i) scratch[i] = std::log1p(f.counts[i]);
+  return scratch;
 }
 
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
@@ -97,7 +97,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
   for (int t = 0; t < S; ++t) {
     const int n = used_ * S + t;
     const auto& f = w.frames[std::size_t(t)];
-    const std::vector<float> planes = input_planes(cfg_, f);
+    const std::vector<float>& planes = input_planes(cfg_, f, planes_);
     downscale_tore(planes, sh, sw, d, in, n);
     if (source_ == MaskSource::net) downscale_tore(planes, sh, sw, d, one_.act, t);
     if (source_ == MaskSource::truth) {

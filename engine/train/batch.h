@@ -19,9 +19,9 @@ namespace yelan::train {
 // pose.masked_input false (every other source becomes this one for such configs).
 enum class MaskSource { none, truth, net, unmasked };
 
-// The network's input planes of one frame: the TORE volume, or log(1 + n) of the event
-// counts for the "counts" representation.
-std::vector<float> input_planes(const ModelConfig& cfg, const camera::sim::SimFrame& f);
+// The network's input planes of one frame: the TORE volume itself, or log(1 + n) of the
+// event counts (the "counts" representation) computed into `scratch`.
+const std::vector<float>& input_planes(const ModelConfig& cfg, const camera::sim::SimFrame& f, std::vector<float>& scratch);
 
 // Mean of each d x d cell of a TORE volume (C x H x W, channel-major, the sensor's size) into
 // frame n of a blocked activation of the model's input size.
@@ -60,6 +60,7 @@ class BatchBuilder {
   MaskSource source_;
   Batch b_;
   OwnedAct one_;  // one window's unmasked input, for the frozen mask net
+  std::vector<float> planes_;  // a frame's count planes (TORE is read in place)
 };
 
 }  // namespace yelan::train

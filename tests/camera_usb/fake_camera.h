@@ -9,7 +9,7 @@
 
 namespace yelan::test::usb {
 
-inline camera::usb::FakeTransport fake_davis346_cli() {
+inline camera::usb::FakeTransport fake_davis346() {
   namespace p = camera::usb;
   p::FakeTransport t;
   t.set_config(p::module::sysinfo, p::sysinfo::chip_identifier, 4);

@@ -27,6 +27,7 @@ using yelan::test::contains;
 using yelan::test::run_cli;
 using yelan::test::slurp;
 using yelan::test::usb::bytes;
+using yelan::test::usb::fake_davis346;
 using yelan::test::usb::col;
 using yelan::test::usb::row;
 using yelan::test::usb::ts;
@@ -34,7 +35,6 @@ using yelan::test::usb::wrap;
 
 namespace {
 
-FakeTransport fake_davis346() { return yelan::test::usb::fake_davis346_cli(); }
 
 // USB buffers of 32.768 ms each (one timestamp wrap apart), 301 events each at odd places.
 std::vector<std::vector<std::uint8_t>> buffers(int n) {

@@ -22,6 +22,7 @@ using namespace yelan::camera::usb;
 using yelan::camera::Event;
 using yelan::camera::usb::DavisDecoder;
 using yelan::test::usb::bytes;
+using yelan::test::usb::fake_davis346;
 using yelan::test::usb::col;
 using yelan::test::usb::row;
 using yelan::test::usb::ts;
@@ -29,7 +30,6 @@ using yelan::test::usb::wrap;
 
 namespace {
 
-FakeTransport fake_davis346() { return yelan::test::usb::fake_davis346_cli(); }
 
 struct CollectingWriter : yelan::camera::EventWriter {
   std::vector<Event> events;
