@@ -16,6 +16,8 @@
 // value is broadcast once per tile and every weight vector loaded once per tile, so a
 // tile does R*NB FMAs per R+NB loads. Border pixels whose taps leave the image run as
 // 1-pixel tiles with only their valid taps, so no input is ever padded or copied.
+// The zero lanes that pad the last source block are skipped, not multiplied: a 6-channel
+// input (the TORE volume) costs 6/16 of a block, an 8-channel one half.
 // Backward-data with stride s splits dx into s x s phases; each phase is a stride-1
 // convolution over dy with the taps that land on it.
 #pragma once

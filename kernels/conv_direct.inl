@@ -29,10 +29,26 @@ struct TileArgs {
   std::ptrdiff_t w_cb, w_ob;     // step to the next source block / next output block
   const Tap* taps;
   int ntaps, ncb;
+  int last_lanes = kBlock;       // source lanes of the last source block that are channels
+                                 // (the rest are zero padding: skipped, not multiplied)
   float* dst;                    // destination pixel of tile column 0, output block 0
   std::ptrdiff_t dst_r, dst_ob;
   const float* bias;             // null, or 16 per output block
 };
+
+// Source lane c of one tap: R broadcasts times NQ weight vectors.
+template <int R, int NQ>
+inline void tile_lane(const TileArgs& a, const float* st, const float* wt, int c, vn (&acc)[R][NQ]) {
+  vn wv[NQ];
+#pragma GCC unroll 16
+  for (int q = 0; q < NQ; ++q) wv[q] = loadv(wt + (q / CONV_NV) * a.w_ob + c * kBlock + (q % CONV_NV) * CONV_VL);
+#pragma GCC unroll 16
+  for (int r = 0; r < R; ++r) {
+    const float xv = st[r * a.src_r + c];
+#pragma GCC unroll 16
+    for (int q = 0; q < NQ; ++q) acc[r][q] += xv * wv[q];
+  }
+}
 
 template <int R, int NB>
 void tile(const TileArgs& a) {
@@ -45,23 +61,17 @@ void tile(const TileArgs& a) {
     for (int r = 0; r < R; ++r) acc[r][q] = b;
   }
   for (int cb = 0; cb < a.ncb; ++cb) {
+    const int lanes = cb == a.ncb - 1 ? a.last_lanes : kBlock;
     const float* s = a.src + cb * a.src_cb;
     const float* w = a.w + cb * a.w_cb;
     for (int t = 0; t < a.ntaps; ++t) {
       const float* st = s + a.taps[t].src;
       const float* wt = w + a.taps[t].w;
+      if (lanes == kBlock) {
 #pragma GCC unroll 16
-      for (int c = 0; c < kBlock; ++c) {
-        vn wv[NQ];
-#pragma GCC unroll 16
-        for (int q = 0; q < NQ; ++q)
-          wv[q] = loadv(wt + (q / CONV_NV) * a.w_ob + c * kBlock + (q % CONV_NV) * CONV_VL);
-#pragma GCC unroll 16
-        for (int r = 0; r < R; ++r) {
-          const float xv = st[r * a.src_r + c];
-#pragma GCC unroll 16
-          for (int q = 0; q < NQ; ++q) acc[r][q] += xv * wv[q];
-        }
+        for (int c = 0; c < kBlock; ++c) tile_lane<R, NQ>(a, st, wt, c, acc);
+      } else {
+        for (int c = 0; c < lanes; ++c) tile_lane<R, NQ>(a, st, wt, c, acc);
       }
     }
   }
@@ -179,6 +189,7 @@ void conv_fwd(const ConvShape& s, const float* x, const float* w, const float* b
         a.w_cb = w_cb;
         a.w_ob = w_ob;
         a.ncb = ICB;
+        a.last_lanes = s.ic - (ICB - 1) * kBlock;
         a.dst = y + (std::ptrdiff_t(n) * OCB + ob0) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
         a.dst_r = kBlock;
         a.dst_ob = y_plane;
@@ -217,6 +228,7 @@ void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, float* d
         a.w_cb = w_cb;
         a.w_ob = w_ob;
         a.ncb = OCB;
+        a.last_lanes = s.oc - (OCB - 1) * kBlock;
         a.dst_r = std::ptrdiff_t(st) * kBlock;
         a.dst_ob = x_plane;
         a.bias = nullptr;

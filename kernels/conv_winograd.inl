@@ -83,6 +83,7 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
             a.taps = &one;
             a.ntaps = 1;
             a.ncb = ICB;
+            a.last_lanes = s.ic - (ICB - 1) * kBlock;
             a.dst_r = kBlock;
             a.dst_ob = cs;
             a.bias = nullptr;

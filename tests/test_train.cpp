@@ -2,6 +2,7 @@
 // short training run through the CLI, and --resume giving the uninterrupted loss curve.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -171,4 +172,26 @@ TEST_CASE("train: baseline inputs: unmasked TORE for masked_input false, log cou
         lit += s;
       }
   CHECK(lit > 0);
+}
+
+TEST_CASE("train: downscale_tore is the plain mean of each cell, bit for bit, on odd sizes and factors", "[train]") {
+  for (const auto& [C, sh, sw, d] : {std::array<int, 4>{6, 7, 9, 2}, {6, 5, 11, 3}, {17, 3, 4, 1}, {2, 8, 8, 4}, {1, 1, 1, 1}}) {
+    std::vector<float> vol(std::size_t(C) * sh * sw);
+    for (std::size_t i = 0; i < vol.size(); ++i) vol[i] = float(std::sin(0.37 * double(i) + 1.0)) * 1.7f;
+    const int H = sh / d, W = sw / d;
+    OwnedAct got;
+    got.resize(2, C, H, W);
+    downscale_tore(vol, sh, sw, d, got.act, 1);
+    for (int c = 0; c < C; ++c)
+      for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+          float s = 0;
+          for (int dy = 0; dy < d; ++dy)
+            for (int dx = 0; dx < d; ++dx) s += vol[std::size_t(c) * sh * sw + std::size_t(y * d + dy) * sw + x * d + dx];
+          const float* frame1 = got.act.data + std::size_t(got.act.cb()) * got.act.pixels() * 16;
+          REQUIRE(frame1[(std::size_t(c / 16) * got.act.pixels() + std::size_t(y) * W + x) * 16 + c % 16] == s * (1.f / float(d * d)));
+          // frame 0 stays untouched (zero)
+          REQUIRE(got.act.data[(std::size_t(c / 16) * got.act.pixels() + std::size_t(y) * W + x) * 16 + c % 16] == 0.f);
+        }
+  }
 }

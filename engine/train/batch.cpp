@@ -45,16 +45,27 @@ void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, i
     throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values does not fill " +
                                 std::to_string(C) + " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
   const float inv = 1.f / float(d * d);
+  // Row sums first (contiguous, vectorised), then one strided store per output value into
+  // the 16-lane layout; the additions run in the plain (dy, dx) order, so the result is
+  // bit-identical to summing each cell on its own.
+  std::vector<float> row(static_cast<std::size_t>(W));
   for (int c = 0; c < C; ++c) {
     float* out = a.data + (std::size_t(n) * a.cb() + c / 16) * a.pixels() * 16 + c % 16;
     const float* in = vol.data() + std::size_t(c) * sensor_h * sensor_w;
-    for (int y = 0; y < H; ++y)
-      for (int x = 0; x < W; ++x) {
-        float s = 0;
+    for (int y = 0; y < H; ++y) {
+      const float* r0 = in + std::size_t(y) * d * sensor_w;
+      if (d == 2) {
+        const float* r1 = r0 + sensor_w;
+        for (int x = 0; x < W; ++x) row[std::size_t(x)] = r0[2 * x] + r0[2 * x + 1] + r1[2 * x] + r1[2 * x + 1];
+      } else {
+        std::fill(row.begin(), row.end(), 0.f);
         for (int dy = 0; dy < d; ++dy)
-          for (int dx = 0; dx < d; ++dx) s += in[std::size_t(y * d + dy) * sensor_w + x * d + dx];
-        out[(std::size_t(y) * W + x) * 16] = s * inv;
+          for (int x = 0; x < W; ++x)
+            for (int dx = 0; dx < d; ++dx) row[std::size_t(x)] += r0[std::size_t(dy) * sensor_w + x * d + dx];
       }
+      float* o = out + std::size_t(y) * W * 16;
+      for (int x = 0; x < W; ++x) o[std::size_t(x) * 16] = row[std::size_t(x)] * inv;
+    }
   }
 }
 
