@@ -83,11 +83,13 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.bidirectional = mode == "bidirectional";
   c.convlstm = mode != "none";
   c.masked_input = get_bool_or(p, where + ".pose", "masked_input", true);
+  c.crop_margin = p.contains("crop_margin") ? get_int(p, where + ".pose", "crop_margin") : 0;
   c.representation = i.contains("representation") ? get_str(i, where + ".input", "representation") : "tore";
   const struct { bool ok; const char* msg; } checks[] = {
       {c.channels >= 1, "input.channels must be >= 1"},
       {c.downscale >= 1, "input.downscale must be >= 1"},
       {c.window >= 1, "input.window must be >= 1"},
+      {c.crop_margin >= 0, "pose.crop_margin must be >= 0"},
       {c.mask_width > 0 && c.pose_width > 0, "width_mult must be > 0"},
       {c.n_masks >= 1 && c.hidden >= 1 && c.stages >= 1 && c.joints >= 1,
        "n_masks, hidden, stages and joints must be >= 1"},

@@ -21,6 +21,9 @@ struct ModelConfig {
   bool bidirectional = true;
   bool convlstm = true;       // pose.convlstm "none": the skip block sees the head's features alone
   bool masked_input = true;   // pose.masked_input false: stage 2 sees the whole input, no stage 1
+  // pose.crop_margin > 0: at inference, stage 2's ResNet head runs only on the mask's
+  // bounding box grown by this many input pixels (PoseNet::forward_cropped); 0: whole frame
+  int crop_margin = 0;
   // input.representation: "tore" (2K = channels TORE planes) or "counts" (2 channels: events
   // of each polarity in the last frame period, log(1 + n); the constant-time-frame baseline)
   std::string representation = "tore";

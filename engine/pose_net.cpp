@@ -1,5 +1,6 @@
 #include "engine/pose_net.h"
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
@@ -71,6 +72,7 @@ void PoseNet::set_training(bool on) {
 }
 
 void PoseNet::weights_changed() {
+  have_zero_feat_ = false;
   conv1_.weights_changed();
   for (auto& b : resnet_) b->weights_changed();
   cl_.weights_changed();
@@ -80,12 +82,14 @@ void PoseNet::weights_changed() {
   for (auto& c : combiners_) c->weights_changed();
 }
 
-void PoseNet::forward(const Act& x, int S) {
+void PoseNet::check_input(const Act& x) const {
   if (x.c != cfg_.channels || x.h != cfg_.height() || x.w != cfg_.width())
     throw std::invalid_argument("pose net '" + cfg_.name + "': input is " + std::to_string(x.c) + "x" + std::to_string(x.h) +
                                 "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.channels) + "x" +
                                 std::to_string(cfg_.height()) + "x" + std::to_string(cfg_.width()));
-  S_ = S;
+}
+
+Act PoseNet::head_forward(const Act& x) {
   c1_ = c1_buf_.like(conv1_.out_shape(x));
   conv1_.forward(x, c1_);
   b1_ = b1_buf_.like(c1_);
@@ -94,13 +98,67 @@ void PoseNet::forward(const Act& x, int S) {
   pool_.forward(b1_, pooled_);
   res_in_.assign(1, pooled_);
   for (auto& b : resnet_) res_in_.push_back(b->forward(res_in_.back()));
-  feats_ = res_in_.back();
+  return res_in_.back();
+}
+
+void PoseNet::forward(const Act& x, int S) {
+  check_input(x);
+  S_ = S;
+  cropped_ = false;
+  feats_ = head_forward(x);
+  tail_forward(feats_, x.n);
+}
+
+PoseNet::CropBox PoseNet::forward_cropped(const Act& x, CropBox box, int S) {
+  check_input(x);
+  if (bn1_.training) throw std::logic_error("pose net: forward_cropped is for inference (set_training(false))");
+  S_ = S;
+  const int H = x.h, W = x.w, F = cfg_.resnet_mid();
+  if (!have_zero_feat_) {
+    Act zero_in = crop_buf_.get(1, x.c, H, W);
+    zero(zero_in);
+    const Act z = head_forward(zero_in);
+    const Act keep = zero_feat_buf_.like(z);
+    std::memcpy(keep.data, z.data, z.floats() * sizeof(float));
+    have_zero_feat_ = true;
+  }
+  const Act z0 = zero_feat_buf_.get(1, F, mid_h_, mid_w_);
+  feats_ = full_feat_buf_.get(x.n, F, mid_h_, mid_w_);
+  for (int n = 0; n < x.n; ++n) std::memcpy(feats_.data + n * z0.floats(), z0.data, z0.floats() * sizeof(float));
+  box.x0 = std::max(0, box.x0) / 8 * 8;
+  box.y0 = std::max(0, box.y0) / 8 * 8;
+  box.x1 = std::min(W, (box.x1 + 7) / 8 * 8);
+  box.y1 = std::min(H, (box.y1 + 7) / 8 * 8);
+  if (!box.empty()) {
+    const int ch = box.y1 - box.y0, cw = box.x1 - box.x0;
+    const Act in = crop_buf_.get(x.n, x.c, ch, cw);
+    for (int n = 0; n < x.n; ++n)
+      for (int cb = 0; cb < x.cb(); ++cb)
+        for (int y = 0; y < ch; ++y)
+          std::memcpy(in.data + ((std::size_t(n) * in.cb() + cb) * ch + y) * cw * 16,
+                      x.data + (((std::size_t(n) * x.cb() + cb) * H + box.y0 + y) * W + box.x0) * 16,
+                      std::size_t(cw) * 16 * sizeof(float));
+    const Act f = head_forward(in);
+    // the crop's feature pixel (i, j) is the frame's (y0/8 + i, x0/8 + j)
+    const int oy = box.y0 / 8, ox = box.x0 / 8, fh = std::min(f.h, mid_h_ - oy), fw = std::min(f.w, mid_w_ - ox);
+    for (int n = 0; n < x.n; ++n)
+      for (int cb = 0; cb < f.cb(); ++cb)
+        for (int y = 0; y < fh; ++y)
+          std::memcpy(feats_.data + (((std::size_t(n) * feats_.cb() + cb) * mid_h_ + oy + y) * mid_w_ + ox) * 16,
+                      f.data + ((std::size_t(n) * f.cb() + cb) * f.h + y) * f.w * 16, std::size_t(fw) * 16 * sizeof(float));
+  }
+  cropped_ = true;
+  tail_forward(feats_, x.n);
+  return box.empty() ? CropBox{} : box;
+}
+
+void PoseNet::tail_forward(const Act& feats, int n_images) {
   if (cfg_.convlstm) {
-    cl_out_ = cl_.forward(feats_, S);
-    cat_ = cat_buf_.get(feats_.n, feats_.c + cl_out_.c, feats_.h, feats_.w);
-    layers::concat_channels(feats_, cl_out_, cat_);
+    cl_out_ = cl_.forward(feats, S_);
+    cat_ = cat_buf_.get(feats.n, feats.c + cl_out_.c, feats.h, feats.w);
+    layers::concat_channels(feats, cl_out_, cat_);
   } else {
-    cat_ = feats_;
+    cat_ = feats;
   }
   const Act skip_out = skip_.forward(cat_);
   const int T = cfg_.stages, J = cfg_.joints;
@@ -127,11 +185,12 @@ void PoseNet::forward(const Act& x, int S) {
       layers::flat_softmax_forward(logits_[t][p], probs_[t][p]);
     }
   }
-  joints_.resize(std::size_t(x.n) * J * 3);
+  joints_.resize(std::size_t(n_images) * J * 3);
   layers::dsnt_joints_forward(probs_[T - 1][0], probs_[T - 1][1], probs_[T - 1][2], joints_.data());
 }
 
 void PoseNet::backward(const Act& x, const std::vector<std::array<Act, 3>>& dheat, const float* djoints) {
+  if (cropped_) throw std::logic_error("pose net: backward after forward_cropped (inference only)");
   const int T = cfg_.stages, J = cfg_.joints;
   const Act shape = inp_[0];
   const Act dI = g_inp_.like(shape);

@@ -28,10 +28,25 @@ class PoseNet {
 
   // x: B windows of S frames (frame t of window b is image b*S + t), cfg.channels x H x W.
   void forward(const layers::Act& x, int frames_per_window);
+
+  // Model-input pixels [x0, x1) x [y0, y1); empty: nothing but zeros in the input.
+  struct CropBox {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x1 <= x0 || y1 <= y0; }
+  };
+  // Inference only: forward() for an input that is zero outside `box` (a masked frame).
+  // The ResNet head runs on the box widened to multiples of 8, its stride, so the crop's
+  // pixel grid is the frame's; elsewhere its features are those of an all-zero frame
+  // (computed once per weights). Exact but for the head's receptive field reaching past the
+  // crop, which the caller's margin around the mask bounds (yelan bench crop measures it).
+  // Returns the box the head ran on (empty when it did not run).
+  CropBox forward_cropped(const layers::Act& x, CropBox box, int frames_per_window);
   // Probability maps of stage t, plane p (0 xy, 1 zy, 2 xz), and normalised joints
   // (n x J x 3) of the last stage, valid until the next forward.
   const layers::Act& heatmap(int stage, int plane) const { return probs_[stage][plane]; }
   const std::vector<float>& joints() const { return joints_; }
+  // The ResNet head's output (n x resnet_mid x mid_h x mid_w) of the last forward.
+  const layers::Act& head_features() const { return feats_; }
   int mid_h() const { return mid_h_; }
   int mid_w() const { return mid_w_; }
 
@@ -40,6 +55,10 @@ class PoseNet {
   void backward(const layers::Act& x, const std::vector<std::array<layers::Act, 3>>& dheat, const float* djoints);
 
  private:
+  void check_input(const layers::Act& x) const;
+  layers::Act head_forward(const layers::Act& x);  // conv1 .. the last BasicBlock
+  void tail_forward(const layers::Act& feats, int n);  // ConvLSTM .. joints
+
   ModelConfig cfg_;
   int mid_h_, mid_w_, S_ = 1;
   layers::Conv2d conv1_;
@@ -59,6 +78,9 @@ class PoseNet {
   std::vector<layers::Act> inp_, hmcat_;
   std::vector<std::array<layers::Act, 3>> logits_, probs_;
   std::vector<float> joints_;
+  // forward_cropped: the head's features for an all-zero frame, the crop and the full map
+  layers::ActBuf zero_feat_buf_, crop_buf_, full_feat_buf_;
+  bool have_zero_feat_ = false, cropped_ = false;
   // gradient scratch
   layers::ActBuf g_inp_, g_prob_, g_logit_, g_hg_, g_cat_, g_extra_[8][3], g_feat_a_, g_feat_b_, g_cl_, g_c1_, g_b1_;
 };

@@ -276,3 +276,62 @@ TEST_CASE("pose net without ConvLSTM: no cl weights, skip block on the head alon
   });
   CHECK(checked >= 10);
 }
+
+TEST_CASE("pose net forward_cropped: features beyond the head's receptive field of the crop edge are the whole frame's", "[networks][pose]") {
+  // A wide frame (64 x 512) whose right half is zero, as a masked frame is outside the mask.
+  const std::string text =
+      R"({"name":"wide","input":{"channels":6,"sensor_height":64,"sensor_width":512,"downscale":1,"window":1},)"
+      R"("mask":{"width_mult":0.125,"n_masks":2},"pose":{"width_mult":0.125,"hidden":4,"stages":1,"joints":13,"convlstm":"causal","crop_margin":8}})";
+  const ModelConfig cfg = parse_model_config(text, "wide");
+  CHECK(cfg.crop_margin == 8);
+  PoseNet net(cfg);
+  net.init(11);
+  net.set_training(false);
+  yelan::test::Owned x(1, 6, 64, 512, 3);
+  x.for_each_real([&](std::size_t i) {
+    if ((i / 16) % 512 >= 256) x.mem[i] = 0.f;
+  });
+  net.forward(x.act, 1);
+  const layers::Act f = net.head_features();
+  const std::vector<float> full(f.data, f.data + f.floats());
+  const std::vector<float> joints_full = net.joints();
+  const PoseNet::CropBox ran = net.forward_cropped(x.act, {3, 5, 250, 60}, 1);
+  CHECK(ran.x0 == 0);  // widened to multiples of 8, clipped to the frame
+  CHECK(ran.y0 == 0);
+  CHECK(ran.x1 == 256);
+  CHECK(ran.y1 == 64);
+  const layers::Act g = net.head_features();
+  REQUIRE(g.floats() == full.size());
+  // The head's receptive field is 179 input pixels (radius 89, stride 8): feature column j
+  // sees input columns 8j - 89 .. 8j + 89. Those inside the crop (j <= 20) are computed
+  // exactly as on the whole frame; those seeing only zeros (j >= 44) are the zero frame's.
+  int compared = 0, differs = 0;
+  for (int cb = 0; cb < g.cb(); ++cb)
+    for (int y = 0; y < g.h; ++y)
+      for (int xcol = 0; xcol < g.w; ++xcol)
+        for (int l = 0; l < 16; ++l) {
+          const std::size_t i = ((std::size_t(cb) * g.h + y) * g.w + xcol) * 16 + l;
+          if (xcol <= 20 || xcol >= 44) {
+            REQUIRE(g.data[i] == Approx(full[i]).margin(1e-5));
+            ++compared;
+          } else {
+            differs += std::abs(g.data[i] - full[i]) > 1e-4f;
+          }
+        }
+  CHECK(compared > 0);
+  CHECK(differs > 0);  // near the crop's edge the zero padding shows: the crop is an approximation there
+  // The whole frame as the box is forward() itself.
+  net.forward_cropped(x.act, {0, 0, 512, 64}, 1);
+  for (std::size_t i = 0; i < joints_full.size(); ++i) REQUIRE(net.joints()[i] == Approx(joints_full[i]).margin(1e-6));
+  // An empty box (no person) skips the head: the result is that of an all-zero frame.
+  yelan::test::Owned zero(1, 6, 64, 512);
+  net.forward(zero.act, 1);
+  const std::vector<float> joints_zero = net.joints();
+  const PoseNet::CropBox none = net.forward_cropped(zero.act, {}, 1);
+  CHECK(none.empty());
+  for (std::size_t i = 0; i < joints_zero.size(); ++i) REQUIRE(net.joints()[i] == Approx(joints_zero[i]).margin(1e-6));
+  CHECK_THROWS_AS(net.backward(zero.act, {}, nullptr), std::logic_error);
+  std::string bad = text;
+  bad.replace(bad.find("\"crop_margin\":8"), 15, "\"crop_margin\":-1");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("pose.crop_margin must be >= 0"));
+}

@@ -60,6 +60,19 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.h5"}).code == 0);
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.txt"}).code == 2);
   CHECK(run_cli({"run", "--weights", d / "w.h5"}).code == 2);
+  // Cropping stage 2 to the mask's box: a margin that covers the frame gives the uncropped
+  // poses exactly; the share of the frame is reported; a negative margin is refused.
+  const auto c0 = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "c0.csv", "--crop-margin", "0",
+                           "--stats-json", d / "c0.json"});
+  const auto cw = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "cw.csv", "--crop-margin", "4096",
+                           "--stats-json", d / "cw.json"});
+  REQUIRE(c0.code == 0);
+  REQUIRE(cw.code == 0);
+  CHECK(slurp(d / "c0.csv") == slurp(d / "cw.csv"));
+  CHECK(contains(slurp(d / "c0.json"), "\"crop_share\": 1}"));
+  CHECK_FALSE(contains(c0.out, "cropped to the mask's box"));
+  CHECK(contains(cw.out, "cropped to the mask's box"));
+  CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--crop-margin", "-3"}).code == 2);
 }
 
 TEST_CASE("run: a file ending mid-packet stops cleanly and keeps the poses computed", "[run][cli]") {

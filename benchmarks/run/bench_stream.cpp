@@ -45,7 +45,9 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
     run::RunOptions o;
     o.rate_hz = std::stod(a.value_or("--rate", "50"));
     o.beta = std::stod(a.value_or("--beta", "0.99"));
-    (std::string(what.name) == "beta" ? o.beta : o.rate_hz) = v;
+    const std::string name = what.name;
+    if (name == "crop_margin") o.crop_margin = int(v);
+    else (name == "beta" ? o.beta : o.rate_hz) = v;
     rows.push_back({v, run::evaluate_stream(*w, sims, o)});
     const auto& r = rows.back().r;
     err << "  " << what.name << " " << v << ": MPJPE " << r.paper.mpjpe_mm << " mm, stage 1 on " << 100 * r.mask_run_fraction
@@ -62,25 +64,25 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
           << ", \"pck150\": " << r.paper.pck150 << ", \"auc\": " << r.paper.auc << ", \"mpjpe_root_mm\": " << r.paper.mpjpe_root_mm
           << ", \"mpjpe_depth_prior_mm\": " << r.deployed.mpjpe_mm << ", \"mask_run_fraction\": " << r.mask_run_fraction
           << ", \"ms_per_tick\": " << r.ms_per_tick << ", \"tore_ms\": " << r.tore_ms << ", \"stage1_ms\": " << r.stage1_ms
-          << ", \"stage2_ms\": " << r.stage2_ms << ", \"time_vs_slowest\": " << r.ms_per_tick / ref_ms
+          << ", \"stage2_ms\": " << r.stage2_ms << ", \"crop_share\": " << r.crop_share << ", \"time_vs_slowest\": " << r.ms_per_tick / ref_ms
           << ", \"ticks\": " << r.ticks << ", \"stale\": " << r.stale << ", \"poses_scored\": " << r.poses_scored
           << ", \"scenes\": " << scenes << ", \"threads\": " << threads() << "}" << (i + 1 < rows.size() ? "," : "") << "\n";
     }
     out << "]\n";
   } else {
-    out << what.name << "      MPJPE mm  (depth prior)  PCK@150  stage 1 ran  ms/tick  stage1 ms  stage2 ms  time vs slowest\n";
+    out << what.name << "      MPJPE mm  (depth prior)  PCK@150  stage 1 ran  ms/tick  stage1 ms  stage2 ms  head on  time vs slowest\n";
     for (const auto& row : rows) {
       const auto& r = row.r;
       char line[256];
-      std::snprintf(line, sizeof line, "%-8g %9.1f %14.1f %8.3f %11.0f%% %8.2f %10.2f %10.2f %15.2f\n", row.value, r.paper.mpjpe_mm,
-                    r.deployed.mpjpe_mm, r.paper.pck150, 100 * r.mask_run_fraction, r.ms_per_tick, r.stage1_ms, r.stage2_ms,
-                    r.ms_per_tick / ref_ms);
+      std::snprintf(line, sizeof line, "%-8g %9.1f %14.1f %8.3f %11.0f%% %8.2f %10.2f %10.2f %7.0f%% %15.2f\n", row.value,
+                    r.paper.mpjpe_mm, r.deployed.mpjpe_mm, r.paper.pck150, 100 * r.mask_run_fraction, r.ms_per_tick, r.stage1_ms,
+                    r.stage2_ms, 100 * r.crop_share, r.ms_per_tick / ref_ms);
       out << line;
     }
   }
   if (const auto chart = a.value("--chart")) {
     XySeries paper{"paper protocol (true head depth)", "#2471a3", {}}, prior{"depth from the body-height prior", "#c0392b", {}};
-    const bool by_beta = std::string(what.name) == "beta";
+    const bool by_beta = std::string(what.name) != "rate";  // time on x: beta and crop margin
     for (const auto& row : rows) {
       std::ostringstream label;
       label << what.name << " " << row.value;
@@ -89,7 +91,10 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
       prior.points.push_back({x, row.r.deployed.mpjpe_mm, ""});
     }
     std::ostringstream title;
-    title << (by_beta ? "Early exit: accuracy against time per pose" : "Accuracy against pose rate (trained at 50/s)") << ", "
+    title << (std::string(what.name) == "beta"          ? "Early exit: accuracy against time per pose"
+              : std::string(what.name) == "crop_margin" ? "Stage 2 cropped to the mask's box: accuracy against time per pose"
+                                                        : "Accuracy against pose rate (trained at 50/s)")
+          << ", "
           << scenes << " test scenes, " << threads() << " thread" << (threads() > 1 ? "s" : "");
     const std::string png = write_xy_chart(*chart, title.str(), by_beta ? "ms per pose (mean over ticks)" : "poses per second",
                                            "MPJPE (mm)", {paper, prior});
@@ -102,6 +107,10 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
 
 int run_early_exit_bench(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
   return sweep({"beta", "bench early-exit", "0.5,0.7,0.8,0.9,0.95,0.99,1.01"}, args, out, err);
+}
+
+int run_crop_bench(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {
+  return sweep({"crop_margin", "bench crop", "0,4,8,16,32"}, args, out, err);
 }
 
 int run_rate_sweep_bench(const std::vector<std::string>& args, std::ostream& out, std::ostream& err) {

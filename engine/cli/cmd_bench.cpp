@@ -21,8 +21,9 @@ int cmd_bench(const std::vector<std::string>& args, std::ostream& out, std::ostr
   if (args[0] == "run") return bench::run_pipeline_bench(rest, out, err);
   if (args[0] == "early-exit") return bench::run_early_exit_bench(rest, out, err);
   if (args[0] == "rate-sweep") return bench::run_rate_sweep_bench(rest, out, err);
+  if (args[0] == "crop") return bench::run_crop_bench(rest, out, err);
   if (args[0] == "train") return bench::run_train_bench(rest, out, err);
-  throw UsageError("unknown benchmark suite '" + args[0] + "' (kernels, events, networks, sim, run, early-exit, rate-sweep, train)");
+  throw UsageError("unknown benchmark suite '" + args[0] + "' (kernels, events, networks, sim, run, early-exit, rate-sweep, crop, train)");
 }
 
 }  // namespace yelan::cli

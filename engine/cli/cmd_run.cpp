@@ -76,7 +76,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   std::vector<std::string> argv = argv_in;
   const CameraChoice cam = take_camera(argv);
   const Args a("run", argv, {"--weights", "--rate", "--out", "--beta", "--height-mm", "--depth-mm", "--threads",
-                             "--stats-json", "--viz", "--viz-every", "--duration"},
+                             "--stats-json", "--viz", "--viz-every", "--duration", "--crop-margin"},
                {"--no-early-exit", "--keep-empty"});
   a.expect_positionals(0, 1);
   const auto w = a.value("--weights");
@@ -106,6 +106,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   opt.body_height_mm = number(a, "--height-mm", "1700");
   opt.fixed_depth_mm = number(a, "--depth-mm", "0");
   opt.skip_empty = !a.flag("--keep-empty");
+  if (a.value("--crop-margin")) opt.crop_margin = a.int_value_or("--crop-margin", 0, 0, 4096);
 
   if (cam.wanted) {
     OpenCamera c = open_camera(cam.serial);

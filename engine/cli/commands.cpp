@@ -10,7 +10,7 @@ const std::vector<Command>& commands() {
        "usage: yelan run --weights W FILE [--rate 50] [--out poses.csv|.json|.h5] [--beta 0.99]\n"
        "       yelan run --weights W --camera [SERIAL] [--duration 10s] [same options]\n"
        "                 [--no-early-exit] [--height-mm 1700 | --depth-mm Z] [--keep-empty]\n"
-       "                 [--threads T] [--stats-json S.json] [--viz DIR [--viz-every N]]\n"
+       "                 [--threads T] [--stats-json S.json] [--viz DIR [--viz-every N]] [--crop-margin PX]\n"
        "Per event the TORE volume; at each tick (--rate per second) stage 1 with early exit (the\n"
        "U-Net runs only when the stored future mask's score is below beta), the masked TORE\n"
        "through stage 2 (causal or windowed bidirectional, as the model's config says), and 13\n"
@@ -22,6 +22,8 @@ const std::vector<Command>& commands() {
        "see `yelan devices`) until --duration or Ctrl-C (exit 0). CSV rows are written and\n"
        "flushed as poses are computed; a camera that stops sending (unplugged, USB error) ends\n"
        "the run with a message and exit 1, every pose computed written.\n"
+       "--crop-margin PX: stage 2's ResNet head runs on the mask's bounding box grown by PX input\n"
+       "pixels (0: the whole frame); default: the model's pose.crop_margin.\n"
        "--viz DIR: a PNG per pose (TORE and mask, projected skeleton, side view); DIR/run.mp4\n"
        "when ffmpeg is installed.\n",
        cmd_run, "streaming pose estimation (issue 8)"},
@@ -104,7 +106,7 @@ const std::vector<Command>& commands() {
        "usage: yelan devices\n"
        "Lists attached DAVIS346/DVXplorer cameras: model, USB bus, address, serial.\n",
        cmd_devices, "the libusb driver (issue 5)"},
-      {"bench", "benchmarks: kernels, events, networks, sim, run, early-exit, rate-sweep, train",
+      {"bench", "benchmarks: kernels, events, networks, sim, run, early-exit, rate-sweep, crop, train",
        "usage: yelan bench kernels [--quick] [--json] [--isa-list avx2,avx512] [--threads-list 1,2]\n"
        "                          [--reps N] [--only NAME] [--chart FILE.svg] [--from RESULTS.json]\n"
        "       yelan bench events [--json]\n"
@@ -113,6 +115,7 @@ const std::vector<Command>& commands() {
        "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta 0.99] [--weights W1,W2] [--no-torch] [--json]\n"
        "       yelan bench early-exit --weights W [--values 0.5,...,0.99,1.01] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
        "       yelan bench rate-sweep --weights W [--values 20,50,100,150,200] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
+       "       yelan bench crop --weights W [--values 0,4,8,16,32] [--scenes 12] [--seed 1] [--beta B] [--chart F.svg] [--json]\n"
        "       yelan bench train [--config small] [--stage pose|mask|both] [--batch 1] [--batches 4] [--steps 20]\n"
        "                         [--threads-list 1] [--sim train] [--json] [--no-torch] [--keep-data FILE.h5]\n"
        "\n"
@@ -131,6 +134,8 @@ const std::vector<Command>& commands() {
        "early-exit, rate-sweep: the pipeline scored on test-split scenes (simulated once, in memory)\n"
        "while beta or the pose rate varies: MPJPE (paper protocol and with the depth prior), the share\n"
        "of ticks that ran stage 1, ms per tick by stage; --chart writes the SVG (and PNG).\n"
+       "crop: the same, while the margin (input pixels) of stage 2's crop around the mask varies\n"
+       "(0: the whole frame), with the share of the frame the ResNet head ran on.\n"
        "train: the trainer's step (zero_grad, forward, loss, backward, Adam) in samples/s on batches\n"
        "built as yelan train builds them, against PyTorch 1.13 training the same config from the same\n"
        "initial weights on the same batches (ratio ours/torch; the initial losses of both show it).\n",

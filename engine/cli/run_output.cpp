@@ -122,7 +122,8 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
     f << "{\"poses_per_s\": " << double(s.poses) / wall_s << ", \"p50_ms\": " << run::percentile(s.times.tick_ms, 0.5)
       << ", \"p99_ms\": " << run::percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << stage1_share()
       << ", \"threads\": " << yelan::threads() << ", \"config\": \"" << pipe_.config_name() << "\", \"poses\": " << s.poses
-      << ", \"ticks\": " << s.ticks << ", \"stale_ticks\": " << s.stale << "}\n";
+      << ", \"ticks\": " << s.ticks << ", \"stale_ticks\": " << s.stale
+      << ", \"crop_share\": " << (s.crop_runs ? s.crop_area / double(s.crop_runs) : 1.0) << "}\n";
   }
 }
 
@@ -141,6 +142,9 @@ void RunSession::report(const std::string& source, double wall_s, std::ostream& 
       << std::setprecision(3) << setup_.options.beta << "), " << s.stale << " ticks without events repeated the last pose\n"
       << "per tick ms p50/p99: TORE " << p50_p99(t.tore_ms) << ", stage 1 " << p50_p99(t.stage1_ms) << ", stage 2 "
       << p50_p99(t.stage2_ms) << ", whole tick " << p50_p99(t.tick_ms) << "\n";
+  if (s.crop_runs)
+    out << "stage 2's head ran on " << std::setprecision(1) << 100 * s.crop_area / double(s.crop_runs)
+        << "% of the frame on average (cropped to the mask's box)\n";
   out.unsetf(std::ios::floatfield);
   out << std::setprecision(6);
 }

@@ -27,6 +27,20 @@ constexpr double kFocalPx = 485;      // DAVIS346 with its standard lens
 constexpr int kBones[8][2] = {{1, 3}, {3, 7}, {2, 4}, {4, 8}, {5, 9}, {9, 11}, {6, 10}, {10, 12}};
 constexpr double kBoneShare[8] = {0.186, 0.146, 0.186, 0.146, 0.245, 0.246, 0.245, 0.246};
 
+// The smallest box holding every nonzero pixel of a w x h mask; empty for an empty mask.
+PoseNet::CropBox bounding_box(const std::vector<float>& mask, int w, int h) {
+  PoseNet::CropBox b{w, h, 0, 0};
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      if (mask[std::size_t(y) * w + x] != 0) {
+        b.x0 = std::min(b.x0, x);
+        b.y0 = std::min(b.y0, y);
+        b.x1 = std::max(b.x1, x + 1);
+        b.y1 = std::max(b.y1, y + 1);
+      }
+  return b.empty() ? PoseNet::CropBox{} : b;
+}
+
 }  // namespace
 
 double head_depth_from_height(const std::array<std::array<double, 3>, 13>& unit, double height_mm) {
@@ -56,7 +70,10 @@ struct PosePipeline::Impl {
   std::int64_t mask_t = 0;
   std::vector<std::vector<float>> masks;  // N binarised masks, H x W
   std::vector<float> scores;
+  std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
   int in_use = 0;
+  int crop = 0;                         // margin; 0: stage 2 on the whole frame
+  PoseNet::CropBox window_box;          // bidirectional: the union over the window's frames
   // stage 2
   int slot = 0;
   std::vector<float> ones;  // the "mask" of configs without stage 1
@@ -77,6 +94,7 @@ struct PosePipeline::Impl {
       throw std::invalid_argument(path + ": config '" + cfg.name + "' reads " + cfg.representation +
                                   " frames; yelan run streams TORE only (the other inputs are baselines for yelan eval)");
     if (!cfg.masked_input) ones.assign(std::size_t(cfg.height()) * cfg.width(), 1.f);
+    crop = cfg.masked_input ? (o.crop_margin >= 0 ? o.crop_margin : cfg.crop_margin) : 0;
     if (!(o.rate_hz >= 1 && o.rate_hz <= 1000)) throw std::invalid_argument("rate must be 1..1000 poses per second");
     dt_us = std::llround(1e6 / o.rate_hz);
     vol.resize(tore.volume_size());
@@ -120,6 +138,27 @@ struct PosePipeline::Impl {
     }
   }
 
+  PoseNet::CropBox grown(PoseNet::CropBox b) const {
+    if (b.empty()) return b;
+    return {b.x0 - crop, b.y0 - crop, b.x1 + crop, b.y1 + crop};
+  }
+
+  static PoseNet::CropBox unite(const PoseNet::CropBox& a, const PoseNet::CropBox& b) {
+    if (a.empty()) return b;
+    if (b.empty()) return a;
+    return {std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
+  }
+
+  void run_stage2(const layers::Act& x, int frames, const PoseNet::CropBox& box) {
+    if (crop <= 0) {
+      nets.pose.forward(x, frames);
+      return;
+    }
+    const PoseNet::CropBox ran = nets.pose.forward_cropped(x, box, frames);
+    stats.crop_area += double(ran.x1 - ran.x0) * (ran.y1 - ran.y0) / (double(x.w) * x.h);
+    ++stats.crop_runs;
+  }
+
   void tick(std::int64_t T, const std::function<void(const Pose&)>& out) {
     const ModelConfig& cfg = nets.cfg;
     const auto t_tick = Clock::now();
@@ -155,6 +194,8 @@ struct PosePipeline::Impl {
         for (std::size_t i = 0; i < m.pixels(); ++i) masks[std::size_t(c)][i] = p[i * 16] > cut ? 1.f : 0.f;
       }
       scores = nets.mask.scores();
+      boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
+      for (int c = 0; c < cfg.n_masks; ++c) boxes[std::size_t(c)] = bounding_box(masks[std::size_t(c)], m.w, m.h);
       mask_t = T;
       have_masks = true;
       use = 0;
@@ -174,17 +215,21 @@ struct PosePipeline::Impl {
           dst.data[std::size_t(n) * per_frame + cb * plane + i * 16 + l] = unmasked.act.data[cb * plane + i * 16 + l] * keep[i];
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;
+    const PoseNet::CropBox box = cfg.masked_input ? grown(boxes[std::size_t(use)]) : PoseNet::CropBox{};
     if (!cfg.bidirectional) {
       if (slot == 0) nets.pose.reset_stream();  // windows of S ticks, as trained
-      nets.pose.forward(frame.act, 1);
+      run_stage2(frame.act, 1, box);
       slot_t[0] = T;
       slot_mask_ran[0] = run_mask;
       slot = (slot + 1) % cfg.window;
       emit_poses(1, out);
-    } else if (++slot == cfg.window) {
-      nets.pose.forward(window.act, cfg.window);
-      slot = 0;
-      emit_poses(cfg.window, out);
+    } else {
+      window_box = slot == 0 ? box : unite(window_box, box);
+      if (++slot == cfg.window) {
+        run_stage2(window.act, cfg.window, window_box);
+        slot = 0;
+        emit_poses(cfg.window, out);
+      }
     }
     stats.times.stage2_ms.push_back(ms_since(t0));
     stats.times.tick_ms.push_back(ms_since(t_tick));
@@ -232,7 +277,7 @@ void PosePipeline::finish(std::int64_t t_us, const std::function<void(const Pose
   if (m.nets.cfg.bidirectional && m.slot > 0) {
     layers::NoGrad no_grad;
     const layers::Act part{m.window.act.data, m.slot, m.window.act.c, m.window.act.h, m.window.act.w};
-    m.nets.pose.forward(part, m.slot);
+    m.run_stage2(part, m.slot, m.window_box);
     const int n = m.slot;
     m.slot = 0;
     m.emit_poses(n, out);

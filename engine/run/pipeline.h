@@ -25,6 +25,8 @@ struct RunOptions {
   double body_height_mm = 1700;  // the depth prior
   double fixed_depth_mm = 0;  // > 0: use this head depth instead of the prior
   bool skip_empty = true;     // no events since the last tick: repeat the last pose
+  int crop_margin = -1;       // stage 2's head on the mask's box grown by this many input
+                              // pixels (0: whole frame; -1: the model's pose.crop_margin)
 };
 
 struct Pose {
@@ -42,6 +44,8 @@ struct StageTimes {
 struct RunStats {
   std::uint64_t ticks = 0, mask_runs = 0, stale = 0, events = 0, poses = 0;
   std::uint64_t gap_ticks = 0;  // skipped over gaps of more than 2 s without events
+  double crop_area = 0;         // sum over stage-2 runs of the head's share of the frame
+  std::uint64_t crop_runs = 0;  // stage-2 runs with cropping on
   StageTimes times;
 };
 

@@ -36,6 +36,7 @@ struct StreamEvalResult {
   double ms_per_tick = 0;          // mean over ticks, all stages
   double tore_ms = 0, stage1_ms = 0, stage2_ms = 0;  // mean per tick (stage 1: over every tick)
   double wall_s = 0;               // pipeline time alone
+  double crop_share = 1;           // mean share of the frame stage 2's head ran on
 };
 
 StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,

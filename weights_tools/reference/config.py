@@ -36,6 +36,7 @@ class ModelConfig:
     convlstm: str          # bidirectional | causal | none (the skip block sees the head alone)
     raw: dict
     masked_input: bool = True      # False: stage 2 reads the whole input, no stage 1
+    crop_margin: int = 0           # inference only (C++ PoseNet::forward_cropped); 0: whole frame
     representation: str = "tore"   # or "counts": log(1 + events) per polarity per frame period              # the JSON object this was read from
 
     @property
@@ -106,12 +107,14 @@ def config_from_dict(d, where="config"):
         convlstm=_get(p, where + ".pose", "convlstm", str),
         raw=d,
         masked_input=_get_bool(p, where + ".pose", "masked_input", True),
+        crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
         representation=_get(i, where + ".input", "representation", str, "tore"),
     )
     checks = [
         (cfg.channels >= 1, "input.channels must be >= 1"),
         (cfg.downscale >= 1, "input.downscale must be >= 1"),
         (cfg.window >= 1, "input.window must be >= 1"),
+        (cfg.crop_margin >= 0, "pose.crop_margin must be >= 0"),
         (cfg.mask_width > 0 and cfg.pose_width > 0, "width_mult must be > 0"),
         (cfg.n_masks >= 1 and cfg.hidden >= 1 and cfg.stages >= 1 and cfg.joints >= 1,
          "n_masks, hidden, stages and joints must be >= 1"),
