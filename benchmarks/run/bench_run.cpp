@@ -44,10 +44,11 @@ std::string random_weights(const std::string& config, const std::string& dir) {
 }  // namespace
 
 int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights"}, {"--json", "--no-torch"});
+  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights", "--crop-margin"}, {"--json", "--no-torch"});
   args.expect_positionals(0, 0);
   const double rate = std::stod(args.value_or("--rate", "50")), seconds = std::stod(args.value_or("--seconds", "2"));
   const double beta = std::stod(args.value_or("--beta", "0.99"));
+  const int crop_margin = args.value("--crop-margin") ? args.int_value_or("--crop-margin", 0, 0, 4096) : -1;
   const std::vector<int> threads = threads_list(args);
   // The events: a dancer simulated in memory.
   camera::sim::SimSpec spec = camera::sim::preset_spec("ben-dance5-front-medium-static");
@@ -69,6 +70,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
     double poses_per_s, p50, p99, tore50, s1_50, s2_50, mask_frac;
     double nets_ms = 0;                    // mean per tick of stage 1 + stage 2 (the networks' work)
     double torch_ms = -1;                  // the same work in PyTorch (benchmarks/torch/pipeline_bench.py)
+    double crop_share = 1;                 // mean share of the frame stage 2's head ran on
   };
   std::vector<Row> rows;
   const int saved = yelan::threads();
@@ -78,6 +80,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       run::RunOptions o;
       o.rate_hz = rate;
       o.beta = beta;
+      o.crop_margin = crop_margin;
       run::PosePipeline pipe(wpath, 346, 260, o);
       std::uint64_t n = 0;
       const auto t0 = std::chrono::steady_clock::now();
@@ -91,6 +94,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       double nets = 0;
       for (std::size_t i = 0; i < s.times.stage1_ms.size(); ++i) nets += s.times.stage1_ms[i] + s.times.stage2_ms[i];
       rows.back().nets_ms = nets / double(std::max<std::size_t>(1, s.times.stage1_ms.size()));
+      if (s.crop_runs) rows.back().crop_share = s.crop_area / double(s.crop_runs);
       err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s\n";
     }
   set_threads(saved);
@@ -121,7 +125,8 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       out << "  {\"config\": \"" << r.config << "\", \"weights\": \"" << r.weights << "\", \"threads\": " << r.threads << ", \"poses_per_s\": " << r.poses_per_s
           << ", \"p50_ms\": " << r.p50 << ", \"p99_ms\": " << r.p99 << ", \"tore_p50_ms\": " << r.tore50
           << ", \"stage1_p50_ms\": " << r.s1_50 << ", \"stage2_p50_ms\": " << r.s2_50
-          << ", \"mask_run_fraction\": " << r.mask_frac << ", \"rate\": " << rate << ", \"nets_ms_per_tick\": " << r.nets_ms;
+          << ", \"mask_run_fraction\": " << r.mask_frac << ", \"rate\": " << rate << ", \"nets_ms_per_tick\": " << r.nets_ms
+          << ", \"crop_share\": " << r.crop_share;
       if (r.torch_ms > 0) out << ", \"torch_nets_ms_per_tick\": " << r.torch_ms << ", \"ours_vs_torch\": " << r.torch_ms / r.nets_ms;
       out << "}" << (i + 1 < rows.size() ? "," : "") << "\n";
     }
