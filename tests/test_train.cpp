@@ -106,6 +106,23 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   INFO(comb.err);
   CHECK(comb.code == 0);
   CHECK(yelan::test::run_cli({"weights", "combine", "--mask", d / "b/final.h5", "-o", d / "x.h5"}).code == 2);
+  // --config swaps in inference settings; a config the tensors do not fit is refused.
+  std::string micro = yelan::test::slurp(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
+  std::string crop = micro, wider = micro;
+  crop.replace(crop.find("\"convlstm\""), 10, "\"crop_margin\": 4, \"convlstm\"");
+  wider.replace(wider.find("\"hidden\": 8"), 11, "\"hidden\": 9");
+  std::ofstream(d / "crop.json") << crop;
+  std::ofstream(d / "wider.json") << wider;
+  const auto cc = yelan::test::run_cli({"weights", "combine", "--mask", d / "both.h5", "--pose", d / "both.h5", "--config",
+                                        d / "crop.json", "-o", d / "crop.h5"});
+  INFO(cc.err);
+  CHECK(cc.code == 0);
+  CHECK(yelan::test::contains(yelan::test::run_cli({"weights", "inspect", d / "crop.h5"}).out, "crop_margin"));
+  const auto cw = yelan::test::run_cli({"weights", "combine", "--mask", d / "both.h5", "--pose", d / "both.h5", "--config",
+                                        d / "wider.json", "-o", d / "wider.h5"});
+  CHECK(cw.code == 2);
+  CHECK(yelan::test::contains(cw.err, "do not fit"));
+  CHECK_FALSE(std::filesystem::exists(d / "wider.h5"));
   // The trained weights evaluate on held-out test scenes; the JSON has the contract's keys.
   const auto ev = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--sim", "test", "--scenes", "2", "--seconds",
                                         "0.04", "--seed", "3", "--json", d / "eval.json"});

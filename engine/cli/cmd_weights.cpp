@@ -11,7 +11,9 @@
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
 #include "weights_tools/json.h"
+#include "engine/model_config.h"
 #include "weights_tools/manifest.h"
+#include "weights_tools/network_io.h"
 #include "weights_tools/weights_file.h"
 
 namespace yelan::cli {
@@ -218,8 +220,23 @@ int combine(const Args& a, std::ostream& out) {
                        "' section, so the mask net does not fit the pose net's input");
   weights::Weights w = wp;
   w.groups["mask"] = wm.groups.at("mask");
+  if (const auto c = a.value("--config")) {
+    // A config for inference settings (pose.crop_margin): it must describe the same networks.
+    const ModelConfig nc = load_model_config(*c);
+    const auto cn = weights::Json::parse(nc.json);
+    for (const char* key : {"input", "mask"})
+      if (!cn.find(key) || cn.find(key)->dump() != cm.find(key)->dump())
+        throw UsageError("weights combine: --config " + *c + " differs from " + *m + " in the '" + key + "' section");
+    w.config_json = nc.json;
+    try {
+      const weights::LoadedNetworks fits(w, *c);
+    } catch (const std::exception& e) {
+      throw UsageError("weights combine: the tensors do not fit --config " + *c + ": " + e.what());
+    }
+  }
   weights::save_weights(*o, w);
-  out << "wrote " << *o << ": mask from " << *m << ", pose from " << *p << "\n";
+  out << "wrote " << *o << ": mask from " << *m << ", pose from " << *p
+      << (a.value("--config") ? ", config from " + *a.value("--config") : std::string()) << "\n";
   return kOk;
 }
 
@@ -234,7 +251,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "diff") return diff(Args("weights diff", rest, {"--tol"}, {"--all"}), out);
     if (sub == "verify") return verify(Args("weights verify", rest, {"--config"}, {}), out, err);
     if (sub == "init") return weights_init(rest, out);
-    if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o"}, {}), out);
+    if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
     for (std::string line; std::getline(lines, line);) err << "yelan: error: " << line << "\n";

@@ -159,7 +159,7 @@ const std::vector<Command>& commands() {
        "       yelan weights diff A B [--tol 0] [--all]\n"
        "       yelan weights verify FILE --config NAME|FILE\n"
        "       yelan weights init --config NAME|FILE --seed N -o W.h5\n"
-       "       yelan weights combine --mask A.h5 --pose B.h5 -o OUT.h5\n"
+       "       yelan weights combine --mask A.h5 --pose B.h5 -o OUT.h5 [--config NAME|FILE]\n"
        "\n"
        "Our weights file: HDF5, root attributes format=\"yelan-weights\", version=1, config (JSON);\n"
        "groups mask/ and pose/ with one float32 dataset per PyTorch state_dict key\n"
@@ -170,7 +170,9 @@ const std::vector<Command>& commands() {
        "verify: every tensor a config needs, with its shape, and nothing else (the config's\n"
        "manifest: weights_tools/configs/NAME.manifest.json, or FILE.manifest.json beside a\n"
        "config FILE). Bad or mismatched files exit 2, one line per problem.\n"
-       "combine: the mask group of A and the pose group of B (stages trained apart) in one file.\n",
+       "combine: the mask group of A and the pose group of B (stages trained apart) in one file;\n"
+       "--config: the file's config instead of B's (inference settings such as pose.crop_margin;\n"
+       "the tensors must fit it).\n",
        cmd_weights, "HDF5 weights (issue 4)"},
   };
   return table;
