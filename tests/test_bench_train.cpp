@@ -1,4 +1,5 @@
-// `yelan bench train` through the CLI: what it reports and the batches it hands to PyTorch.
+// `yelan bench train` through the CLI: what it reports and the batches it hands to PyTorch;
+// the sweep charts' labels.
 // No timing is asserted (tests never time); the micro config keeps each run to seconds.
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
@@ -8,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "benchmarks/run/xy_chart.h"
 #include "camera/io/h5.h"
 #include "cli_util.h"
 
@@ -135,4 +137,23 @@ TEST_CASE("bench train: PyTorch's initial loss equals ours on the same batches",
     CHECK(row["ratio"].is_number());
   }
   CHECK_FALSE(yelan::test::contains(r.err, "warning"));
+}
+
+TEST_CASE("bench: chart labels of points that coincide stack instead of overlapping", "[bench]") {
+  yelan::test::CliTempDir d("xy-chart");
+  // Three betas giving the same time and accuracy (stage 1 on every tick), one elsewhere.
+  yelan::bench::XySeries s{"paper protocol", "#2471a3", {{10, 300, "beta 0.95"}, {10, 300, "beta 0.99"}, {10, 300, "beta 1.01"},
+                                                         {3, 310, "beta 0.5"}}};
+  yelan::bench::write_xy_chart(d / "c.svg", "t", "x", "y", {s});
+  const std::string svg = yelan::test::slurp(d / "c.svg");
+  auto label_y = [&](const std::string& label) {
+    const std::size_t end = svg.find(">" + label + "</text>");
+    REQUIRE(end != std::string::npos);
+    const std::size_t y = svg.rfind("y=\"", end);
+    return std::stod(svg.substr(y + 3));
+  };
+  const double a = label_y("beta 0.95"), b = label_y("beta 0.99"), c = label_y("beta 1.01");
+  CHECK(std::abs(a - b) >= 13);
+  CHECK(std::abs(b - c) >= 13);
+  CHECK(std::abs(a - c) >= 13);
 }

@@ -72,6 +72,21 @@ std::string write_xy_chart(const std::string& svg_path, const std::string& title
     << "<text x=\"" << (L + W - R) / 2 << "\" y=\"" << H - 18 << "\" text-anchor=\"middle\">" << esc(x_label) << "</text>\n"
     << "<text transform=\"translate(18," << (T + H - B) / 2 << ") rotate(-90)\" text-anchor=\"middle\">" << esc(y_label)
     << "</text>\n";
+  // Labels of points that land close together (equal times) stack downwards instead of
+  // printing over each other.
+  std::vector<std::pair<double, double>> placed;
+  auto label_y = [&](double x, double y) {
+    for (bool moved = true; moved;) {
+      moved = false;
+      for (const auto& [px, py] : placed)
+        if (std::abs(px - x) < 70 && std::abs(py - y) < 13) {
+          y = py + 13;
+          moved = true;
+        }
+    }
+    placed.push_back({x, y});
+    return y;
+  };
   for (std::size_t i = 0; i < series.size(); ++i) {
     const XySeries& s = series[i];
     o << "<polyline fill=\"none\" stroke=\"" << s.colour << "\" stroke-width=\"1.5\" points=\"";
@@ -79,7 +94,8 @@ std::string write_xy_chart(const std::string& svg_path, const std::string& title
     o << "\"/>\n";
     for (const auto& p : s.points) {
       o << "<circle cx=\"" << X(p.x) << "\" cy=\"" << Y(p.y) << "\" r=\"4\" fill=\"" << s.colour << "\"/>";
-      if (!p.label.empty()) o << "<text x=\"" << X(p.x) + 7 << "\" y=\"" << Y(p.y) - 7 << "\">" << esc(p.label) << "</text>";
+      if (!p.label.empty())
+        o << "<text x=\"" << X(p.x) + 7 << "\" y=\"" << label_y(X(p.x) + 7, Y(p.y) - 7) << "\">" << esc(p.label) << "</text>";
       o << "\n";
     }
     o << "<circle cx=\"" << W - R - 190 << "\" cy=\"" << T + 12 + 18 * i << "\" r=\"5\" fill=\"" << s.colour << "\"/><text x=\""
