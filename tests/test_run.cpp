@@ -47,9 +47,13 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
     if (i > 1) CHECK(std::stoll(rows[i][0]) - std::stoll(rows[i - 1][0]) == 20000);
   }
   CHECK(contains(slurp(d / "s.json"), "\"mask_run_fraction\": 1"));
+  CHECK(contains(slurp(d / "s.json"), "\"early_exit_saved_ms\": 0,"));
   // beta 0: every stored future mask is good enough; stage 1 runs once per n_masks (3) ticks.
-  const auto e = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--beta", "0", "--out", d / "e.csv"});
+  const auto e = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--beta", "0", "--out", d / "e.csv",
+                          "--stats-json", d / "e.json"});
   REQUIRE(e.code == 0);
+  CHECK(contains(e.out, "early exit saved about"));
+  CHECK_FALSE(contains(slurp(d / "e.json"), "\"early_exit_saved_ms\": 0,"));
   const auto er = csv_rows(slurp(d / "e.csv"));
   int ran = 0;
   for (std::size_t i = 1; i < er.size(); ++i) ran += er[i][41] == "1";
@@ -69,7 +73,7 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   REQUIRE(c0.code == 0);
   REQUIRE(cw.code == 0);
   CHECK(slurp(d / "c0.csv") == slurp(d / "cw.csv"));
-  CHECK(contains(slurp(d / "c0.json"), "\"crop_share\": 1}"));
+  CHECK(contains(slurp(d / "c0.json"), "\"crop_share\": 1,"));
   CHECK_FALSE(contains(c0.out, "cropped to the mask's box"));
   CHECK(contains(cw.out, "cropped to the mask's box"));
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--crop-margin", "-3"}).code == 2);
@@ -86,6 +90,18 @@ TEST_CASE("run: a file ending mid-packet stops cleanly and keeps the poses compu
   CHECK(r.code == 2);
   CHECK(contains(r.err, "poses computed before are written"));
   CHECK(std::filesystem::exists(d / "p.csv"));
+}
+
+TEST_CASE("run: early exit's saving costs each reused tick at stage 1's mean time", "[run]") {
+  yelan::run::RunStats s;
+  s.ticks = 10;
+  s.stale = 2;  // no events: neither stage runs, nothing saved
+  CHECK(yelan::run::early_exit_saved_ms(s) == 0);  // stage 1 never ran (no mask net)
+  s.mask_runs = 2;
+  s.stage1_run_ms = 30;
+  CHECK(yelan::run::early_exit_saved_ms(s) == Approx(6 * 15.0));
+  s.mask_runs = 8;  // every tick with events ran it
+  CHECK(yelan::run::early_exit_saved_ms(s) == 0);
 }
 
 TEST_CASE("run: the depth prior scales a unit-depth skeleton to the body height", "[run]") {

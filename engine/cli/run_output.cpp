@@ -106,6 +106,14 @@ double RunSession::stage1_share() const {
   return s.ticks ? double(s.mask_runs) / double(s.ticks - s.stale + 1e-9) : 0;
 }
 
+double RunSession::saved_share() const {
+  const run::RunStats& s = pipe_.stats();
+  double spent = 0;
+  for (double ms : s.times.tick_ms) spent += ms;
+  const double saved = run::early_exit_saved_ms(s);
+  return spent + saved > 0 ? saved / (spent + saved) : 0;
+}
+
 void RunSession::write_outputs(double wall_s, std::ostream& err) {
   if (outputs_written_) return;
   outputs_written_ = true;
@@ -123,7 +131,9 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
       << ", \"p99_ms\": " << run::percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << stage1_share()
       << ", \"threads\": " << yelan::threads() << ", \"config\": \"" << pipe_.config_name() << "\", \"poses\": " << s.poses
       << ", \"ticks\": " << s.ticks << ", \"stale_ticks\": " << s.stale
-      << ", \"crop_share\": " << (s.crop_runs ? s.crop_area / double(s.crop_runs) : 1.0) << "}\n";
+      << ", \"crop_share\": " << (s.crop_runs ? s.crop_area / double(s.crop_runs) : 1.0)
+      << ", \"early_exit_saved_ms\": " << run::early_exit_saved_ms(s) << ", \"early_exit_saved_share\": " << saved_share()
+      << "}\n";
   }
 }
 
@@ -142,6 +152,9 @@ void RunSession::report(const std::string& source, double wall_s, std::ostream& 
       << std::setprecision(3) << setup_.options.beta << "), " << s.stale << " ticks without events repeated the last pose\n"
       << "per tick ms p50/p99: TORE " << p50_p99(t.tore_ms) << ", stage 1 " << p50_p99(t.stage1_ms) << ", stage 2 "
       << p50_p99(t.stage2_ms) << ", whole tick " << p50_p99(t.tick_ms) << "\n";
+  if (s.mask_runs)
+    out << "early exit saved about " << std::setprecision(1) << run::early_exit_saved_ms(s) << " ms of stage 1 ("
+        << 100 * saved_share() << "% of what the ticks would have taken with stage 1 on each)\n";
   if (s.crop_runs)
     out << "stage 2's head ran on " << std::setprecision(1) << 100 * s.crop_area / double(s.crop_runs)
         << "% of the frame on average (cropped to the mask's box)\n";

@@ -49,6 +49,7 @@ class RunSession {
   std::uint64_t poses() const { return poses_written_; }
   // Stage 1 runs over the ticks that had events, 0..1.
   double stage1_share() const;
+  double saved_share() const;  // early exit's saving over the time the ticks would have taken
   const run::PosePipeline& pipeline() const { return pipe_; }
   const RunSetup& setup() const { return setup_; }
 

@@ -202,6 +202,7 @@ struct PosePipeline::Impl {
       ++stats.mask_runs;
     }
     stats.times.stage1_ms.push_back(ms_since(t0));
+    if (run_mask) stats.stage1_run_ms += stats.times.stage1_ms.back();
     // Masked TORE -> stage 2.
     t0 = Clock::now();
     const layers::Act& dst = cfg.bidirectional ? window.act : frame.act;
@@ -299,6 +300,13 @@ double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, std::size_t(q * double(v.size() - 1) + 0.5))];
+}
+
+double early_exit_saved_ms(const RunStats& s) {
+  if (s.mask_runs == 0) return 0;
+  const std::uint64_t with_events = s.ticks - s.stale;
+  const std::uint64_t reused = with_events > s.mask_runs ? with_events - s.mask_runs : 0;
+  return double(reused) * s.stage1_run_ms / double(s.mask_runs);
 }
 
 std::string pose_csv_header() {
