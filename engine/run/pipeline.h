@@ -46,12 +46,13 @@ struct RunStats {
   std::uint64_t gap_ticks = 0;  // skipped over gaps of more than 2 s without events
   double crop_area = 0;         // sum over stage-2 runs of the head's share of the frame
   std::uint64_t crop_runs = 0;  // stage-2 runs with cropping on
-  double stage1_run_ms = 0;     // stage 1's time summed over the ticks that ran it
+  std::vector<double> stage1_run_ms;  // stage 1's time on each tick that ran it
   StageTimes times;
 };
 
 // Early exit's saving, estimated: the ticks with events that reused a stored mask, each
-// costed at stage 1's mean time on the ticks that ran it (0 when stage 1 never ran).
+// costed at stage 1's median time on the ticks that ran it (the median, because the first
+// run is cold and short files have few runs); 0 when stage 1 never ran.
 double early_exit_saved_ms(const RunStats& s);
 
 class PosePipeline {
