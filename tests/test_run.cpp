@@ -79,6 +79,30 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--crop-margin", "-3"}).code == 2);
 }
 
+#include "engine/run/viz.h"
+
+TEST_CASE("run: --viz OUT.mp4 encodes the frames into a video with ffmpeg, and is refused up front without it", "[run][cli]") {
+  yelan::test::CliTempDir d("run-viz");
+  REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.2s", "-o", d / "r.yelan.h5"}).code == 0);
+  CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "it's"}).code == 2);
+  const auto r = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "v.MP4", "--out", d / "p.csv"});
+  if (yelan::run::RunViz::have_ffmpeg()) {
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::string mp4 = slurp(d / "v.MP4");
+    REQUIRE(mp4.size() > 12);
+    CHECK(mp4.substr(4, 4) == "ftyp");  // an MP4 container
+    CHECK_FALSE(std::filesystem::exists(d / "v.MP4.frames"));
+    CHECK_FALSE(std::filesystem::exists(d / "v.MP4.part.mp4"));
+  } else {
+    CHECK(r.code == 2);
+    CHECK(contains(r.err, "needs ffmpeg"));
+    CHECK_FALSE(std::filesystem::exists(d / "p.csv"));  // refused before any work
+    CHECK_FALSE(std::filesystem::exists(d / "v.MP4.frames"));
+  }
+}
+
 TEST_CASE("run: a file ending mid-packet stops cleanly and keeps the poses computed", "[run][cli]") {
   yelan::test::CliTempDir d("run-trunc");
   REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);

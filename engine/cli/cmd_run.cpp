@@ -14,6 +14,7 @@
 #include "engine/cli/handlers.h"
 #include "engine/cli/run_live.h"
 #include "engine/cli/run_output.h"
+#include "engine/run/viz.h"
 #include "engine/threads.h"
 
 namespace yelan::cli {
@@ -94,6 +95,13 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   if (setup.out) check_pose_output(*setup.out);
   setup.stats_json = a.value("--stats-json");
   setup.viz_dir = a.value("--viz");
+  if (setup.viz_dir) {
+    try {
+      run::RunViz::check_target(*setup.viz_dir);
+    } catch (const std::invalid_argument& e) {
+      throw UsageError(e.what());
+    }
+  }
   setup.viz_every = a.int_value_or("--viz-every", 1, 1, 1 << 20);
   if (const auto t = a.value("--threads")) {
     const auto n = parse_thread_count(*t);

@@ -10,7 +10,7 @@ const std::vector<Command>& commands() {
        "usage: yelan run --weights W FILE [--rate 50] [--out poses.csv|.json|.h5] [--beta 0.99]\n"
        "       yelan run --weights W --camera [SERIAL] [--duration 10s] [same options]\n"
        "                 [--no-early-exit] [--height-mm 1700 | --depth-mm Z] [--keep-empty]\n"
-       "                 [--threads T] [--stats-json S.json] [--viz DIR [--viz-every N]] [--crop-margin PX]\n"
+       "                 [--threads T] [--stats-json S.json] [--viz DIR|OUT.mp4 [--viz-every N]] [--crop-margin PX]\n"
        "Per event the TORE volume; at each tick (--rate per second) stage 1 with early exit (the\n"
        "U-Net runs only when the stored future mask's score is below beta), the masked TORE\n"
        "through stage 2 (causal or windowed bidirectional, as the model's config says), and 13\n"
@@ -25,7 +25,8 @@ const std::vector<Command>& commands() {
        "--crop-margin PX: stage 2's ResNet head runs on the mask's bounding box grown by PX input\n"
        "pixels (0: the whole frame); default: the model's pose.crop_margin.\n"
        "--viz DIR: a PNG per pose (TORE and mask, projected skeleton, side view); DIR/run.mp4\n"
-       "when ffmpeg is installed.\n",
+       "when ffmpeg is installed. --viz OUT.mp4: the same frames as a video at the pose rate\n"
+       "(needs ffmpeg).\n",
        cmd_run, "streaming pose estimation (issue 8)"},
       {"sim", "simulate a dancer seen by an event camera, with labels",
        "usage: yelan sim --preset NAME|--config scene.json [--seed N] [--duration 2s] -o OUT.yelan.h5\n"

@@ -74,7 +74,8 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
 
 RunSession::RunSession(const RunSetup& setup, int sensor_width, int sensor_height, bool live)
     : setup_(setup), live_(live), pipe_(setup.weights, sensor_width, sensor_height, setup.options) {
-  if (setup_.viz_dir) viz_.emplace(*setup_.viz_dir, sensor_width, sensor_height, setup_.viz_every);
+  if (setup_.viz_dir)
+    viz_.emplace(*setup_.viz_dir, sensor_width, sensor_height, setup_.viz_every, setup_.options.rate_hz);
   if (live_ && setup_.out && extension(*setup_.out) == ".csv") {
     live_csv_.open(*setup_.out, std::ios::trunc);
     live_csv_ << run::pose_csv_header() << "\n" << std::flush;
@@ -123,7 +124,9 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
   } else if (setup_.out) {
     write_poses(*setup_.out, kept_);
   }
-  if (viz_) err << viz_->finish() << " pictures in " << *setup_.viz_dir << "\n";
+  if (viz_)
+    err << viz_->finish() << (run::RunViz::is_video(*setup_.viz_dir) ? " frames in " : " pictures in ") << *setup_.viz_dir
+        << "\n";
   if (setup_.stats_json) {
     const run::RunStats& s = pipe_.stats();
     std::ofstream f(*setup_.stats_json);

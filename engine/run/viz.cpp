@@ -1,16 +1,43 @@
 #include "engine/run/viz.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 
 #include "camera/repr/preview_png.h"
 #include "camera/sim/preview.h"
 
 namespace yelan::run {
 
-RunViz::RunViz(const std::string& dir, int w, int h, int every) : dir_(dir), w_(w), h_(h), every_(std::max(1, every)) {
+bool RunViz::is_video(const std::string& target) {
+  if (target.size() < 4) return false;
+  std::string ext = target.substr(target.size() - 4);
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".mp4";
+}
+
+bool RunViz::have_ffmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
+
+void RunViz::check_target(const std::string& target) {
+  if (target.find('\'') != std::string::npos)
+    throw std::invalid_argument("--viz '" + target + "': a path with a single quote cannot be passed to ffmpeg");
+  if (is_video(target) && !have_ffmpeg())
+    throw std::invalid_argument("--viz " + target + ": a video needs ffmpeg on PATH (apt-get install ffmpeg); "
+                                "give a directory for PNG frames instead");
+}
+
+RunViz::RunViz(const std::string& target, int w, int h, int every, double fps)
+    : w_(w), h_(h), every_(std::max(1, every)), fps_(fps > 0 ? fps / std::max(1, every) : 25) {
+  check_target(target);
+  if (is_video(target)) {
+    video_ = target;
+    dir_ = target + ".frames";
+  } else {
+    dir_ = target;
+  }
   std::filesystem::create_directories(dir_);
 }
 
@@ -58,11 +85,26 @@ void RunViz::add(const Pose& p, const PosePipeline& pipe) {
 }
 
 int RunViz::finish() {
-  if (written_ > 0 && std::system("command -v ffmpeg >/dev/null 2>&1") == 0) {
-    const std::string cmd = "ffmpeg -loglevel error -y -framerate 25 -i '" + dir_ + "/pose_%06d.png' -pix_fmt yuv420p '" +
-                            dir_ + "/run.mp4'";
-    if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "yelan: ffmpeg could not make %s/run.mp4\n", dir_.c_str());
+  const bool video = !video_.empty();
+  if (written_ == 0 || (!video && !have_ffmpeg())) return written_;
+  const std::string out = video ? video_ : dir_ + "/run.mp4";
+  const std::string part = out + ".part.mp4";
+  char rate[32];
+  std::snprintf(rate, sizeof rate, "%.3f", fps_);
+  const std::string cmd = "ffmpeg -loglevel error -y -framerate " + std::string(rate) + " -i '" + dir_ +
+                          "/pose_%06d.png' -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' '" + part + "'";
+  std::error_code ec;
+  if (std::system(cmd.c_str()) != 0) {
+    std::filesystem::remove(part, ec);
+    std::fprintf(stderr, "yelan: ffmpeg could not make %s (the frames are kept in %s)\n", out.c_str(), dir_.c_str());
+    return written_;
   }
+  std::filesystem::rename(part, out, ec);
+  if (ec) {
+    std::fprintf(stderr, "yelan: cannot move %s to %s: %s\n", part.c_str(), out.c_str(), ec.message().c_str());
+    return written_;
+  }
+  if (video) std::filesystem::remove_all(dir_, ec);
   return written_;
 }
 

@@ -1,7 +1,9 @@
 // Pictures of a run (`yelan run --viz DIR`): per pose a PNG of three panels: the TORE's
 // newest ON/OFF slots (red/blue) with the mask in use tinted green, the same with the
 // predicted skeleton projected, and a side view of the 3D skeleton (depth to the right,
-// 1 px = 10 mm). ffmpeg, when installed, turns them into DIR/run.mp4.
+// 1 px = 10 mm). ffmpeg, when installed, turns them into DIR/run.mp4. A target ending in
+// .mp4 is a video: the frames go to TARGET.frames/, ffmpeg (required) encodes them at the
+// pose rate into a temporary file renamed to TARGET, and the frames are removed.
 #pragma once
 #include <string>
 
@@ -11,14 +13,22 @@ namespace yelan::run {
 
 class RunViz {
  public:
-  RunViz(const std::string& dir, int sensor_width, int sensor_height, int every = 1);
+  // fps: the frames' rate in the video (the pose rate over `every`).
+  RunViz(const std::string& target, int sensor_width, int sensor_height, int every = 1, double fps = 25);
   void add(const Pose& p, const PosePipeline& pipe);
-  // Writes DIR/run.mp4 if ffmpeg is present; returns how many PNGs were written.
+  // Makes the video (see above); returns how many frames were drawn.
   int finish();
 
+  static bool is_video(const std::string& target);
+  static bool have_ffmpeg();
+  // Throws std::invalid_argument when the target cannot be made: a quote in the path (the
+  // ffmpeg command line quotes it), or a video without ffmpeg.
+  static void check_target(const std::string& target);
+
  private:
-  std::string dir_;
+  std::string dir_, video_;
   int w_, h_, every_, seen_ = 0, written_ = 0;
+  double fps_;
 };
 
 }  // namespace yelan::run
