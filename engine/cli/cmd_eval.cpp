@@ -1,9 +1,11 @@
-// `yelan eval`: MPJPE, PCK@150 and AUC of a weights file on simulated test scenes.
+// `yelan eval`: MPJPE, PCK@150 and AUC of a weights file on simulated test scenes or on
+// labelled recordings on disk.
 #include <filesystem>
 #include <fstream>
 
 #include "camera/io/event_writer.h"
 #include "camera/sim/presets.h"
+#include "camera/sim/recording_windows.h"
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
@@ -18,15 +20,21 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads"},
                {"--true-mask"});
   a.expect_positionals(0, 0);
-  if (a.value("--data")) throw UsageError("--data DIR (recordings on disk) is not supported yet: use --sim test|PRESETS");
-  const auto wpath = a.value("--weights"), simv = a.value("--sim");
-  if (!wpath || !simv) throw UsageError("eval needs --weights W --sim test|PRESETS");
+  const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
+  if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
+  if (simv && data) throw UsageError("give --sim or --data, not both");
   train::EvalSpec spec;
   spec.weights = *wpath;
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
   spec.seconds_per_scene = std::stod(a.value_or("--seconds", "1"));
   spec.true_mask = a.flag("--true-mask");
-  if (*simv == "test") {
+  if (data) {
+    try {
+      spec.recordings = camera::sim::list_recordings(*data);
+    } catch (const std::runtime_error& e) {
+      throw UsageError(std::string("--data: ") + e.what());
+    }
+  } else if (*simv == "test") {
     for (const auto& n : train::draw_test_scenes(spec.seed, a.int_value_or("--scenes", 48, 1, 1 << 20)))
       spec.scenes.push_back(camera::sim::preset_spec(n));
   } else {

@@ -1,10 +1,12 @@
-// `yelan train`: the CPU trainer (engine/train) on windows streamed from the simulator.
+// `yelan train`: the CPU trainer (engine/train) on windows streamed from the simulator or
+// read from labelled recordings on disk.
 #include <unistd.h>
 
 #include <fstream>
 #include <iostream>
 
 #include "camera/sim/presets.h"
+#include "camera/sim/recording_windows.h"
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
@@ -47,15 +49,18 @@ std::vector<sim::SimSpec> scenes_from(const std::string& text) {
 
 int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("train", argv,
-               {"--stage", "--config", "--sim", "--val-sim", "--data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
+               {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs"},
                {"--occlusion", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
-  if (a.value("--data")) throw UsageError("--data DIR (recordings on disk) is not supported yet: use --sim PRESETS|train");
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
-  if (!stage || !config || !simv || !o)
-    throw UsageError("train needs --stage mask|pose --config NAME|FILE --sim PRESETS|train -o OUTDIR");
+  const auto data = a.value("--data");
+  if (!stage || !config || (!simv && !data) || !o)
+    throw UsageError("train needs --stage mask|pose --config NAME|FILE --sim PRESETS|train or --data DIR, and -o OUTDIR");
+  if (simv && data) throw UsageError("give --sim or --data, not both");
+  if (a.value("--val-data") && !data) throw UsageError("--val-data goes with --data");
+  if (a.value("--val-sim") && data) throw UsageError("--val-sim goes with --sim (with --data: --val-data DIR)");
   train::TrainSpec spec;
   spec.stage = *stage;
   if (spec.stage != "mask" && spec.stage != "pose") throw UsageError("--stage must be mask or pose");
@@ -64,8 +69,24 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   } catch (const ConfigError& e) {
     throw UsageError(e.what());
   }
-  spec.scenes = scenes_from(*simv);
-  if (const auto v = a.value("--val-sim")) spec.val_scenes = scenes_from(*v);
+  if (simv) {
+    spec.scenes = scenes_from(*simv);
+    if (const auto v = a.value("--val-sim")) spec.val_scenes = scenes_from(*v);
+  } else {
+    try {
+      const auto all = camera::sim::list_recordings(*data);
+      if (const auto v = a.value("--val-data")) {
+        spec.data = all;
+        spec.val_data = camera::sim::list_recordings(*v);
+      } else {
+        camera::sim::split_by_recording(all, spec.data, spec.val_data);
+      }
+    } catch (const std::runtime_error& e) {
+      throw UsageError(std::string("--data: ") + e.what());
+    }
+    err << spec.data.size() << " recordings for training, " << spec.val_data.size() << " for validation ("
+        << (a.value("--val-data") ? "--val-data" : "every tenth by name, split by recording") << ")\n";
+  }
   spec.out_dir = *o;
   spec.steps = a.int_value_or("--steps", 1000, 1, 1 << 30);
   spec.batch = a.int_value_or("--batch", 1, 1, 1024);

@@ -44,6 +44,7 @@ const std::vector<Command>& commands() {
        cmd_sim, "the motion-to-event simulator (issue 6)"},
       {"train", "train the mask or pose network on CPU",
        "usage: yelan train --stage mask|pose --config NAME|FILE --sim PRESETS|train -o OUTDIR\n"
+       "       yelan train --stage mask|pose --config NAME|FILE --data DIR [--val-data DIR] -o OUTDIR\n"
        "                   [--steps 1000] [--batch 1] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
        "                   [--occlusion] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
        "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
@@ -51,17 +52,21 @@ const std::vector<Command>& commands() {
        "at each frame, downscaled to the config's input. mask: the U-Net learns the current and\n"
        "N-1 future masks. pose: the pose net learns the normalised 3D joints from masked TORE\n"
        "(the mask from --mask-weights, frozen, or else the simulator's true mask).\n"
+       "--data DIR: windows from the labelled recordings in DIR (*.yelan.h5, as yelan sim\n"
+       "writes them) instead, frames on their mask times; validation on every tenth\n"
+       "recording by name (split by recording, never by frame) or on --val-data DIR.\n"
        "Adam (L2 1e-5), LR halved every 5 (mask) / 10 (pose) epochs, validation on other\n"
        "recordings each epoch, early stop after --patience 10 epochs. OUTDIR gets log.csv,\n"
        "checkpoint.h5 + checkpoint.state (atomic, every --checkpoint-minutes and at the end),\n"
        "best.h5 and final.h5; --resume continues from the checkpoint bit-exactly.\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
-       "usage: yelan eval --weights W --sim test|PRESETS [--seed N] [--scenes M] [--seconds 1]\n"
+       "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
        "                  [--true-mask] [--json OUT] [--threads T]\n"
        "Both networks as deployed on simulated scenes: --sim test draws M scenes of the test\n"
        "split (held-out characters and motions; views, lightings and backgrounds in turn)\n"
-       "with seed N, so anyone can check a model on scenes it never saw. Joints are\n"
+       "with seed N, so anyone can check a model on scenes it never saw. --data DIR: the\n"
+       "labelled recordings in DIR (*.yelan.h5), up to --seconds of each. Joints are\n"
        "denormalised with the true head depth (the paper protocol). Prints MPJPE, PCK@150,\n"
        "AUC (also root-aligned), per joint and per condition, and the mask IoU; --json OUT\n"
        "writes mpjpe_mm, pck150, auc, mpjpe_root_mm, frames, by_condition, ....\n",

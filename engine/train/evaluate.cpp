@@ -1,11 +1,13 @@
 #include "engine/train/evaluate.h"
 
 #include <cmath>
+#include <functional>
 #include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "camera/sim/presets.h"
+#include "camera/sim/recording_windows.h"
 #include "camera/sim/rng.h"
 #include "camera/sim/window_stream.h"
 #include "engine/mask_net.h"
@@ -49,26 +51,12 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   std::map<std::string, std::map<std::string, PoseMetrics>> cond;
   double inter = 0, uni = 0;
   BatchBuilder builder(cfg, 1, spec.true_mask ? MaskSource::truth : MaskSource::net);
-  for (std::size_t i = 0; i < spec.scenes.size(); ++i) {
-    const sim::SimSpec& s = spec.scenes[i];
-    sim::WindowStreamOptions o;
-    o.window = cfg.window;
-    o.counts = cfg.representation == "counts";
-    o.warmup_s = 0.1;
-    const int windows = std::max(1, int(std::floor(spec.seconds_per_scene * o.frame_hz / cfg.window)));
-    o.scene_s = o.warmup_s + windows * cfg.window / o.frame_hz + 1e-6;
-    sim::SimWindowStream stream({s}, sim::hash64(spec.seed, 0xe7a1, i), o);
-    const sim::Character& ch = sim::character_by_name(s.character);
-    const std::map<std::string, std::string> conditions = {
-        {"lighting", sim::light_name(s.scene.light)},
-        {"background", s.scene.background == sim::SceneConfig::dynamic ? "dynamic" : "static"},
-        {"view", sim::view_name(s.scene.view)},
-        {"character", s.character},
-        {"clothing", sim::clothing_name(ch.clothing)},
-        {"occlusion", s.scene.occluders ? "occluded" : "clear"}};
+  // One scene or recording: `windows` windows from `next`, scored under `conditions`.
+  auto score = [&](int windows, const std::function<void(sim::SimWindow&)>& next,
+                   const std::map<std::string, std::string>& conditions) {
     for (int k = 0; k < windows; ++k) {
       sim::SimWindow win;
-      stream.next(win);
+      next(win);
       builder.clear();
       builder.add(win, mask, nullptr);
       const Batch& b = builder.batch();
@@ -103,14 +91,52 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         }
       }
     }
-    err << "[" << (i + 1) << "/" << spec.scenes.size() << "] " << s.name << ": MPJPE so far " << std::fixed
+  };
+  sim::WindowStreamOptions o;
+  o.window = cfg.window;
+  o.counts = cfg.representation == "counts";
+  o.warmup_s = 0.1;
+  const int max_windows = std::max(1, int(std::floor(spec.seconds_per_scene * o.frame_hz / cfg.window)));
+  const std::size_t total = spec.scenes.size() + spec.recordings.size();
+  for (std::size_t i = 0; i < spec.scenes.size(); ++i) {
+    const sim::SimSpec& s = spec.scenes[i];
+    sim::WindowStreamOptions so = o;
+    so.scene_s = o.warmup_s + max_windows * cfg.window / o.frame_hz + 1e-6;
+    sim::SimWindowStream stream({s}, sim::hash64(spec.seed, 0xe7a1, i), so);
+    const sim::Character& ch = sim::character_by_name(s.character);
+    score(max_windows, [&](sim::SimWindow& w) { stream.next(w); },
+          {{"lighting", sim::light_name(s.scene.light)},
+           {"background", s.scene.background == sim::SceneConfig::dynamic ? "dynamic" : "static"},
+           {"view", sim::view_name(s.scene.view)},
+           {"character", s.character},
+           {"clothing", sim::clothing_name(ch.clothing)},
+           {"occlusion", s.scene.occluders ? "occluded" : "clear"}});
+    err << "[" << (i + 1) << "/" << total << "] " << s.name << ": MPJPE so far " << std::fixed << std::setprecision(1)
+        << all.scores().mpjpe_mm << " mm\n";
+  }
+  for (std::size_t i = 0; i < spec.recordings.size(); ++i) {
+    sim::RecordingWindowStream stream({spec.recordings[i]}, spec.seed, o);
+    const sim::RecordingInfo& r = stream.info(0);
+    const int windows = std::min(max_windows, stream.windows_in(0));
+    std::map<std::string, std::string> conditions = {{"lighting", r.lighting}, {"background", r.background},
+                                                     {"view", r.view},         {"character", r.character},
+                                                     {"occlusion", r.occluded ? "occluded" : "clear"}};
+    try {
+      conditions["clothing"] = sim::clothing_name(sim::character_by_name(r.character).clothing);
+    } catch (const std::exception&) {
+      // a character this build does not know: no clothing group
+    }
+    for (auto it = conditions.begin(); it != conditions.end();) it = it->second.empty() ? conditions.erase(it) : std::next(it);
+    if (windows == 0) err << r.path << ": too short for one window of " << cfg.window << " frames; skipped\n";
+    score(windows, [&](sim::SimWindow& w) { stream.next(w); }, conditions);
+    err << "[" << (spec.scenes.size() + i + 1) << "/" << total << "] " << r.name << ": MPJPE so far " << std::fixed
         << std::setprecision(1) << all.scores().mpjpe_mm << " mm\n";
   }
   res.all = all.scores();
   res.mask_iou = uni > 0 ? inter / uni : 0;
   for (const auto& [name, values] : cond)
     for (const auto& [value, m] : values) res.by_condition[name][value] = m.scores();
-  res.scenes = spec.scenes.size();
+  res.scenes = total;
   return res;
 }
 

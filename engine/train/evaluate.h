@@ -16,6 +16,7 @@ namespace yelan::train {
 struct EvalSpec {
   std::string weights;
   std::vector<camera::sim::SimSpec> scenes;
+  std::vector<std::string> recordings;  // *.yelan.h5 files, evaluated after the scenes
   std::uint64_t seed = 1;
   double seconds_per_scene = 1.0;
   bool true_mask = false;  // multiply by the simulator's mask instead of the mask net's

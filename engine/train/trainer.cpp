@@ -14,6 +14,7 @@
 
 #include "camera/io/event_writer.h"
 #include "camera/sim/rng.h"
+#include "camera/sim/recording_windows.h"
 #include "camera/sim/window_stream.h"
 #include "engine/losses.h"
 #include "engine/mask_net.h"
@@ -135,13 +136,30 @@ std::string eta_text(double s) {
   return o.str();
 }
 
+// Windows from the simulator or from recordings on disk, behind one interface.
+class WindowSource {
+ public:
+  WindowSource(const std::vector<sim::SimSpec>& scenes, const std::vector<std::string>& recordings, std::uint64_t seed,
+               const sim::WindowStreamOptions& o) {
+    if (!recordings.empty()) rec_ = std::make_unique<sim::RecordingWindowStream>(recordings, seed, o);
+    else sim_ = std::make_unique<sim::SimWindowStream>(scenes, seed, o);
+  }
+  void next(sim::SimWindow& w) { rec_ ? rec_->next(w) : sim_->next(w); }
+  void seek(std::uint64_t k) { rec_ ? rec_->seek_window(k) : sim_->seek_scene(k); }
+
+ private:
+  std::unique_ptr<sim::SimWindowStream> sim_;
+  std::unique_ptr<sim::RecordingWindowStream> rec_;
+};
+
 }  // namespace
 
 TrainResult train(const TrainSpec& spec, std::ostream& err) {
   const ModelConfig& cfg = spec.cfg;
   const bool pose_stage = spec.stage == "pose";
   if (!pose_stage && spec.stage != "mask") throw std::invalid_argument("stage must be mask or pose, got '" + spec.stage + "'");
-  if (spec.scenes.empty()) throw std::invalid_argument("no training scenes");
+  if (spec.scenes.empty() && spec.data.empty()) throw std::invalid_argument("no training scenes or recordings");
+  if (!spec.data.empty() && spec.val_data.empty()) throw std::invalid_argument("recordings for training but none for validation");
   if (spec.out_dir.empty()) throw std::invalid_argument("no output folder");
   if (spec.batch < 1 || spec.steps < 1 || spec.steps_per_epoch < 1)
     throw std::invalid_argument("batch, steps and steps per epoch must be >= 1");
@@ -198,8 +216,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   so.scene_s = so.warmup_s + so.window / so.frame_hz + 1e-6;
   so.shuffle = true;
   so.counts = cfg.representation == "counts";
-  sim::SimWindowStream stream(spec.scenes, spec.seed, so);
-  stream.seek_scene(std::uint64_t(st.step) * std::uint64_t(spec.batch));
+  WindowSource stream(spec.scenes, spec.data, spec.seed, so);
+  stream.seek(std::uint64_t(st.step) * std::uint64_t(spec.batch));
   std::vector<sim::SimSpec> val_scenes = spec.val_scenes.empty() ? spec.scenes : spec.val_scenes;
   const bool frozen_mask = pose_stage && !spec.mask_weights.empty();
   BatchBuilder builder(cfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none);
@@ -221,7 +239,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   };
   // Mean loss of the net in eval mode over the validation windows (fixed for the run).
   auto validate = [&] {
-    sim::SimWindowStream vs(val_scenes, spec.seed ^ 0x7a11da7eull, so);
+    WindowSource vs(val_scenes, spec.val_data, spec.seed ^ 0x7a11da7eull, so);
     BatchBuilder vb(cfg, 1, builder.source());
     mask.set_training(false);
     pose.set_training(false);

@@ -1,5 +1,5 @@
 // The CPU trainer (SPEC section 6): windows of S frames straight from the simulator (no
-// disk), Adam with L2 decay and a step LR schedule, validation on other scenes each epoch
+// disk) or from labelled recordings on disk, Adam with L2 decay and a step LR schedule, validation on other scenes each epoch
 // with early stopping, occlusion augmentation, a CSV log, and atomic checkpoints every few
 // minutes from which --resume continues bit-exactly.
 //   stage "mask": the U-Net on TORE, labels the current and N-1 future masks.
@@ -21,6 +21,9 @@ struct TrainSpec {
   std::string stage = "pose";
   ModelConfig cfg;
   std::vector<camera::sim::SimSpec> scenes, val_scenes;
+  // Recordings on disk (*.yelan.h5) instead of the simulator: training and validation
+  // files, split by recording (camera::sim::split_by_recording).
+  std::vector<std::string> data, val_data;
   std::uint64_t seed = 1;
   int batch = 1;                    // windows per step
   std::int64_t steps = 1000;

@@ -1,0 +1,152 @@
+// Windows read from labelled recordings on disk: frames on the mask times, the TORE of
+// exactly the events since the warm-up, joints and masks of the file, seeded picks that
+// depend on the window number alone, and clear errors on files that are not recordings.
+#include <catch2/catch.hpp>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "camera/io/event_reader.h"
+#include "camera/io/event_writer.h"
+#include "camera/sim/presets.h"
+#include "camera/sim/recording_windows.h"
+
+using namespace yelan::camera;
+using namespace yelan::camera::sim;
+
+namespace {
+
+struct Dir {
+  std::filesystem::path p;
+  Dir() : p(std::filesystem::temp_directory_path() / ("yelan-recwin-" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(p);
+    std::filesystem::create_directories(p);
+  }
+  ~Dir() { std::filesystem::remove_all(p); }
+  std::string operator/(const std::string& f) const { return (p / f).string(); }
+};
+
+std::string record(const Dir& d, const std::string& preset, double seconds) {
+  SimSpec s = preset_spec(preset);
+  s.duration_s = seconds;
+  s.seed = 5;
+  const std::string path = d / (preset + ".yelan.h5");
+  write_recording(s, path);
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("recording windows: frames on the mask times, TORE of the events since the warm-up, the file's joints and masks", "[sim]") {
+  Dir d;
+  const std::string path = record(d, "ben-dance3-front-high-static", 0.5);
+  const RecordingInfo info = read_recording_info(path);
+  CHECK(info.name == "ben-dance3-front-high-static");
+  CHECK(info.character == "ben");
+  CHECK(info.view == "front");
+  CHECK(info.camera.width == 346);
+  WindowStreamOptions o;
+  o.window = 3;
+  o.warmup_s = 0.1;
+  o.counts = true;
+  auto reader = open_event_file(path);
+  std::vector<Event> ev;
+  while (reader->read(ev, 1 << 16) > 0) {
+  }
+  REQUIRE(!ev.empty());
+  // The first frame: the first mask time with 0.1 s of events before it.
+  std::size_t first = 0;
+  while (info.mask_t[first] - 100000 < ev.front().t) ++first;
+  RecordingWindowStream stream({path}, 1, o);
+  CHECK(stream.windows_in(0) == int(info.mask_t.size() - first) / 3);
+  SimWindow a, b;
+  stream.next(a);
+  stream.next(b);
+  REQUIRE(a.frames.size() == 3);
+  CHECK(a.scene == info.name);
+  CHECK(a.frames[0].t_us == info.mask_t[first]);
+  CHECK(a.frames[1].t_us - a.frames[0].t_us == 20000);
+  CHECK(b.frames[0].t_us - a.frames[2].t_us == 20000);  // consecutive windows follow on
+  // The TORE and counts by hand: every event from the warm-up's start up to the frame time.
+  const std::int64_t t0 = a.frames[0].t_us - 100000;
+  for (const SimFrame* f : {&a.frames[0], &a.frames[2], &b.frames[1]}) {
+    ToreVolume tore(346, 260, o.tore);
+    double counted = 0;
+    for (const Event& e : ev)
+      if (e.t >= t0 && e.t <= f->t_us) {
+        tore.update(e);
+        counted += e.t > f->t_us - 20000;
+      }
+    std::vector<float> want(tore.volume_size());
+    tore.readout(f->t_us, want.data());
+    CHECK(f->tore == want);
+    double sum = 0;
+    for (float c : f->counts) sum += c;
+    CHECK(sum == counted);
+    // Labels are at 300 Hz, so a frame time is a label time: its joints exactly.
+    const auto it = std::find(info.label_t.begin(), info.label_t.end(), f->t_us);
+    REQUIRE(it != info.label_t.end());
+    const std::size_t row = std::size_t(it - info.label_t.begin());
+    CHECK(f->joints_mm[7][2] == Approx(info.joints[(row * 13 + 7) * 3 + 2]));
+    CHECK(f->mask.size() == std::size_t(346 * 260));
+  }
+  std::size_t human = 0;
+  for (auto m : a.frames[0].mask) human += m;
+  CHECK(human > 100);  // the dancer is in the mask
+}
+
+TEST_CASE("recording windows: a seeded window depends on its number alone, and splits are by recording", "[sim]") {
+  Dir d;
+  const std::vector<std::string> paths = {record(d, "ben-dance3-front-high-static", 0.4),
+                                          record(d, "ana-05_04-left-medium-dynamic", 0.4)};
+  WindowStreamOptions o;
+  o.window = 2;
+  o.shuffle = true;
+  RecordingWindowStream s1(paths, 9, o), s2(paths, 9, o);
+  SimWindow w;
+  for (int k = 0; k < 4; ++k) s1.next(w);
+  SimWindow fifth, again;
+  s1.next(fifth);
+  s2.seek_window(4);
+  s2.next(again);
+  CHECK(fifth.scene == again.scene);
+  CHECK(fifth.frames[1].t_us == again.frames[1].t_us);
+  CHECK(fifth.frames[1].tore == again.frames[1].tore);
+  // Every tenth recording validates; never a recording on both sides.
+  std::vector<std::string> all, train, val;
+  for (int i = 0; i < 23; ++i) all.push_back(std::to_string(100 + i));
+  split_by_recording(all, train, val);
+  CHECK(val == std::vector<std::string>{"109", "119"});
+  CHECK(train.size() == 21);
+  split_by_recording({"a", "b"}, train, val);
+  CHECK(val == std::vector<std::string>{"b"});
+  CHECK_THROWS(split_by_recording({"a"}, train, val));
+}
+
+TEST_CASE("recording windows: files that are not labelled recordings are named with what is missing", "[sim]") {
+  Dir d;
+  CHECK_THROWS_WITH(list_recordings(d / ""), Catch::Contains("no recordings"));
+  CHECK_THROWS_WITH(list_recordings(d / "nothing-here"), Catch::Contains("not a directory"));
+  // A plain event file in our format: events but no labels.
+  {
+    StreamInfo info;
+    info.width = 346, info.height = 260;
+    auto w = open_yelan_h5_writer(d / "plain.yelan.h5", info);
+    const std::vector<Event> ev = {{10, 1, 2, 1}, {20, 3, 4, 0}};
+    w->write(ev);
+    w->close();
+  }
+  CHECK_THROWS_WITH(read_recording_info(d / "plain.yelan.h5"), Catch::Contains("plain.yelan.h5") && Catch::Contains("labels"));
+  std::ofstream(d / "junk.yelan.h5") << "not hdf5";
+  CHECK_THROWS_WITH(read_recording_info(d / "junk.yelan.h5"), Catch::Contains("junk.yelan.h5"));
+  // Too short for a window after the warm-up.
+  const std::string shortrec = record(d, "ben-dance3-front-high-static", 0.12);
+  WindowStreamOptions o;
+  o.window = 8;
+  o.shuffle = true;
+  RecordingWindowStream s({shortrec}, 1, o);
+  SimWindow w;
+  CHECK_THROWS_WITH(s.next(w), Catch::Contains("too short"));
+}
