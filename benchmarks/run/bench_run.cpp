@@ -94,7 +94,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       double nets = 0;
       for (std::size_t i = 0; i < s.times.stage1_ms.size(); ++i) nets += s.times.stage1_ms[i] + s.times.stage2_ms[i];
       rows.back().nets_ms = nets / double(std::max<std::size_t>(1, s.times.stage1_ms.size()));
-      if (s.crop_runs) rows.back().crop_share = s.crop_area / double(s.crop_runs);
+      rows.back().crop_share = run::crop_share(s);
       err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s\n";
     }
   set_threads(saved);

@@ -134,7 +134,7 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
       << ", \"p99_ms\": " << run::percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << stage1_share()
       << ", \"threads\": " << yelan::threads() << ", \"config\": \"" << pipe_.config_name() << "\", \"poses\": " << s.poses
       << ", \"ticks\": " << s.ticks << ", \"stale_ticks\": " << s.stale
-      << ", \"crop_share\": " << (s.crop_runs ? s.crop_area / double(s.crop_runs) : 1.0)
+      << ", \"crop_share\": " << run::crop_share(s)
       << ", \"early_exit_saved_ms\": " << run::early_exit_saved_ms(s) << ", \"early_exit_saved_share\": " << saved_share()
       << "}\n";
   }
@@ -159,7 +159,7 @@ void RunSession::report(const std::string& source, double wall_s, std::ostream& 
     out << "early exit saved about " << std::setprecision(1) << run::early_exit_saved_ms(s) << " ms of stage 1 ("
         << 100 * saved_share() << "% of what the ticks would have taken with stage 1 on each)\n";
   if (s.crop_runs)
-    out << "stage 2's head ran on " << std::setprecision(1) << 100 * s.crop_area / double(s.crop_runs)
+    out << "stage 2's head ran on " << std::setprecision(1) << 100 * run::crop_share(s)
         << "% of the frame on average (cropped to the mask's box)\n";
   out.unsetf(std::ios::floatfield);
   out << std::setprecision(6);

@@ -327,6 +327,8 @@ double early_exit_saved_ms(const RunStats& s) {
   return double(reused) * percentile(s.stage1_run_ms, 0.5);
 }
 
+double crop_share(const RunStats& s) { return s.crop_runs ? s.crop_area / double(s.crop_runs) : 1.0; }
+
 std::string pose_csv_header() {
   static const char* names[13] = {"head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",
                                   "handR", "handL", "kneeR", "kneeL", "footR", "footL"};

@@ -54,6 +54,8 @@ struct RunStats {
 // costed at stage 1's median time on the ticks that ran it (the median, because the first
 // run is cold and short files have few runs); 0 when stage 1 never ran.
 double early_exit_saved_ms(const RunStats& s);
+// The mean share of the frame stage 2's head ran on (1 when cropping was off).
+double crop_share(const RunStats& s);
 
 class PosePipeline {
  public:
