@@ -40,28 +40,22 @@ std::vector<T> read_all(hid_t f, const std::string& path, const std::string& nam
   return out;
 }
 
-double read_matrix_entry(hid_t f, const std::string& path, const std::string& name, int rows, int cols, int r, int c) {
-  const auto v = read_all<double>(f, path, name, H5T_NATIVE_DOUBLE, {hsize_t(cols)});
-  if (v.size() != std::size_t(rows) * cols) fail(path, name + " is not " + std::to_string(rows) + "x" + std::to_string(cols));
-  return v[std::size_t(r) * cols + c];
+h5::H5Id open_recording(const std::string& path) {
+  h5::silence_errors();
+  try {
+    return h5::open_file(path);
+  } catch (const std::exception& e) {
+    fail(path, std::string("cannot open as HDF5: ") + e.what());
+  }
 }
 
-}  // namespace
-
-RecordingInfo read_recording_info(const std::string& path) {
+// Everything but the events and the mask pictures, from an open file.
+RecordingInfo read_info(hid_t f, const std::string& path) {
   RecordingInfo r;
   r.path = path;
   r.name = fs::path(path).filename().string();
   if (r.name.size() > std::string(kSuffix).size() && r.name.ends_with(kSuffix))
     r.name.resize(r.name.size() - std::string(kSuffix).size());
-  h5::silence_errors();
-  h5::H5Id file;
-  try {
-    file = h5::open_file(path);
-  } catch (const std::exception& e) {
-    fail(path, std::string("cannot open as HDF5: ") + e.what());
-  }
-  const hid_t f = file.get();
   if (!h5::exists(f, "labels/t") || !h5::exists(f, "masks/t"))
     fail(path, "no labels/t or masks/t: an event file, not a labelled recording (`yelan sim` writes those)");
   try {
@@ -69,10 +63,9 @@ RecordingInfo read_recording_info(const std::string& path) {
     if (!w || !h || *w < 1 || *h < 1 || *w > 65536 || *h > 65536) fail(path, "no valid camera/width and camera/height");
     r.camera.width = int(*w);
     r.camera.height = int(*h);
-    r.camera.fx = read_matrix_entry(f, path, "camera/K", 3, 3, 0, 0);
-    r.camera.fy = read_matrix_entry(f, path, "camera/K", 3, 3, 1, 1);
-    r.camera.cx = read_matrix_entry(f, path, "camera/K", 3, 3, 0, 2);
-    r.camera.cy = read_matrix_entry(f, path, "camera/K", 3, 3, 1, 2);
+    const auto k = read_all<double>(f, path, "camera/K", H5T_NATIVE_DOUBLE, {3});
+    if (k.size() != 9) fail(path, "camera/K is not 3x3");
+    r.camera.fx = k[0], r.camera.fy = k[4], r.camera.cx = k[2], r.camera.cy = k[5];
     r.character = h5::read_attr_string(f, "character").value_or("");
     r.motion = h5::read_attr_string(f, "motion").value_or("");
     r.view = h5::read_attr_string(f, "view").value_or("");
@@ -97,6 +90,13 @@ RecordingInfo read_recording_info(const std::string& path) {
   for (std::size_t i = 1; i < r.mask_t.size(); ++i)
     if (r.mask_t[i] <= r.mask_t[i - 1]) fail(path, "masks/t is not increasing at row " + std::to_string(i));
   return r;
+}
+
+}  // namespace
+
+RecordingInfo read_recording_info(const std::string& path) {
+  const h5::H5Id file = open_recording(path);
+  return read_info(file.get(), path);
 }
 
 std::vector<std::string> list_recordings(const std::string& dir) {
@@ -124,17 +124,17 @@ void split_by_recording(const std::vector<std::string>& all, std::vector<std::st
 }
 
 struct RecordingWindowStream::Open {
+  h5::H5Id file, masks;  // opened once: the info and the masks come from it
   RecordingInfo info;
   std::unique_ptr<EventReader> reader;
-  h5::H5Id file, masks;
   ToreVolume tore;
   std::vector<float> counts;
   std::vector<Event> buf;
   std::size_t first_mask = 0;  // the first mask time with warmup_s of events before it
   std::size_t index = 0;
 
-  Open(RecordingInfo i, const WindowStreamOptions& o)
-      : info(std::move(i)), tore(info.camera.width, info.camera.height, o.tore) {
+  Open(const std::string& path, const WindowStreamOptions& o)
+      : file(open_recording(path)), info(read_info(file.get(), path)), tore(info.camera.width, info.camera.height, o.tore) {
     reader = open_event_file(info.path);
     if (reader->info().width != info.camera.width || reader->info().height != info.camera.height)
       fail(info.path, "the events are " + std::to_string(reader->info().width) + "x" + std::to_string(reader->info().height) +
@@ -142,7 +142,6 @@ struct RecordingWindowStream::Open {
     const auto t0 = reader->peek_time();
     if (!t0) fail(info.path, "no events");
     info.first_event_us = *t0;
-    file = h5::open_file(info.path);
     masks = h5::check(H5Dopen2(file.get(), "masks/data", H5P_DEFAULT), info.path + ": open masks/data");
     const auto dims = h5::shape(masks.get());
     if (dims.size() != 3 || dims[0] != info.mask_t.size() || dims[1] != hsize_t(info.camera.height) ||
@@ -217,7 +216,7 @@ RecordingWindowStream::~RecordingWindowStream() = default;
 RecordingWindowStream::Open& RecordingWindowStream::open(std::size_t i) {
   if (cache_.empty() || cache_[0]->index != i) {
     cache_.clear();
-    auto o = std::make_unique<Open>(read_recording_info(paths_[i]), opt_);
+    auto o = std::make_unique<Open>(paths_[i], opt_);
     o->index = i;
     cache_.push_back(std::move(o));
   }
