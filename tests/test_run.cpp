@@ -85,21 +85,22 @@ TEST_CASE("run: --viz OUT.mp4 encodes the frames into a video with ffmpeg, and i
   yelan::test::CliTempDir d("run-viz");
   REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
   REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.2s", "-o", d / "r.yelan.h5"}).code == 0);
-  CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "it's"}).code == 2);
-  const auto r = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "v.MP4", "--out", d / "p.csv"});
+  // No shell between yelan and ffmpeg: quotes, spaces, '%', ':' and '$' in the path are fine.
+  const std::string video = "it's 100% v:$HOME.MP4";
+  const auto r = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / video, "--out", d / "p.csv"});
   if (yelan::run::RunViz::have_ffmpeg()) {
     INFO(r.err);
     REQUIRE(r.code == 0);
-    const std::string mp4 = slurp(d / "v.MP4");
+    const std::string mp4 = slurp(d / video);
     REQUIRE(mp4.size() > 12);
     CHECK(mp4.substr(4, 4) == "ftyp");  // an MP4 container
-    CHECK_FALSE(std::filesystem::exists(d / "v.MP4.frames"));
-    CHECK_FALSE(std::filesystem::exists(d / "v.MP4.part.mp4"));
+    CHECK_FALSE(std::filesystem::exists(d / (video + ".frames")));
+    CHECK_FALSE(std::filesystem::exists(d / (video + ".part.mp4")));
   } else {
     CHECK(r.code == 2);
     CHECK(contains(r.err, "needs ffmpeg"));
     CHECK_FALSE(std::filesystem::exists(d / "p.csv"));  // refused before any work
-    CHECK_FALSE(std::filesystem::exists(d / "v.MP4.frames"));
+    CHECK_FALSE(std::filesystem::exists(d / (video + ".frames")));
   }
 }
 

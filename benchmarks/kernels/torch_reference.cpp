@@ -7,6 +7,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "engine/subprocess.h"
+
 #ifndef YELAN_SOURCE_DIR
 #define YELAN_SOURCE_DIR "."
 #endif
@@ -31,7 +33,7 @@ TorchTimes torch_conv_times(const std::vector<ConvCase>& cases, const std::vecto
   TorchTimes out;
   const char* env = std::getenv("YELAN_TORCH_SCRIPT");
   const std::string script = env ? env : YELAN_SOURCE_DIR "/benchmarks/torch/conv_bench.py";
-  if (std::system("/usr/bin/python3 -c 'import torch' >/dev/null 2>&1") != 0) {
+  if (!run_program(Program({"/usr/bin/python3", "-c", "import torch"})).ok()) {
     *why = "PyTorch is not importable by /usr/bin/python3 (apt-get install python3-torch)";
     return out;
   }
@@ -51,18 +53,15 @@ TorchTimes torch_conv_times(const std::vector<ConvCase>& cases, const std::vecto
   req << "]}";
   const std::string tmp = "/tmp/yelan-torch-req-" + std::to_string(::getpid()) + ".json";
   std::ofstream(tmp) << req.str();
-  const std::string cmd = "/usr/bin/python3 " + script + " < " + tmp;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  std::string text;
-  if (p) {
-    char buf[4096];
-    std::size_t n;
-    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) text.append(buf, n);
-    if (::pclose(p) != 0) text.clear();
-  }
+  Program py({"/usr/bin/python3", script});
+  py.stdin_path = tmp;
+  py.capture_stdout = true;
+  py.show_stderr = true;
+  const ProgramResult res = run_program(py);
+  const std::string text = res.ok() ? res.out : std::string();
   std::remove(tmp.c_str());
   if (text.empty()) {
-    *why = "the PyTorch script failed: " + cmd;
+    *why = "the PyTorch script failed: /usr/bin/python3 " + script + " < " + tmp;
     return out;
   }
   for (std::size_t at = text.find('{'); at != std::string::npos; at = text.find('{', at + 1)) {

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <map>
@@ -14,6 +15,7 @@
 #include "engine/losses.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
+#include "engine/subprocess.h"
 #include "engine/threads.h"
 #include "kernels/cpu.h"
 
@@ -96,18 +98,26 @@ void bench_config(const ModelConfig& cfg, int frames, int threads, int reps, std
 // PyTorch on the same configs and windows (benchmarks/torch/net_bench.py), after ours.
 void torch_times(const std::vector<std::pair<std::string, int>>& configs, const std::vector<int>& threads, int reps,
                  std::vector<Row>& rows, std::ostream& err) {
-  if (std::system("/usr/bin/python3 -c 'import torch' >/dev/null 2>&1") != 0) {
+  if (!run_program(Program({"/usr/bin/python3", "-c", "import torch"})).ok()) {
     err << "no PyTorch comparison: /usr/bin/python3 cannot import torch\n";
     return;
   }
-  std::ostringstream cmd;
-  cmd << "cd '" << YELAN_SOURCE_DIR << "' && /usr/bin/python3 benchmarks/torch/net_bench.py --reps " << reps << " --threads ";
-  for (std::size_t i = 0; i < threads.size(); ++i) cmd << (i ? "," : "") << threads[i];
-  for (const auto& [c, frames] : configs) cmd << " '" << c << ":" << frames << "'";
-  FILE* p = ::popen(cmd.str().c_str(), "r");
-  if (!p) return;
-  char line[512];
-  while (std::fgets(line, sizeof line, p)) {  // "config mode threads ms_per_frame"
+  std::string thread_list;
+  for (int t : threads) thread_list += std::string(thread_list.empty() ? "" : ",") + std::to_string(t);
+  Program py({"/usr/bin/python3", "benchmarks/torch/net_bench.py", "--reps", std::to_string(reps), "--threads", thread_list});
+  // Config names resolve against the source tree, where the script runs; a config file the
+  // caller named by a relative path goes as an absolute one.
+  for (const auto& [c, frames] : configs) {
+    std::error_code ec;
+    const bool file = std::filesystem::is_regular_file(c, ec);
+    py.argv.push_back((file ? std::filesystem::absolute(c).string() : c) + ":" + std::to_string(frames));
+  }
+  py.cwd = YELAN_SOURCE_DIR;
+  py.capture_stdout = true;
+  py.show_stderr = true;
+  std::istringstream lines(run_program(py).out);
+  for (std::string text; std::getline(lines, text);) {  // "config mode threads ms_per_frame"
+    const char* line = text.c_str();
     char cfg[128], mode[32];
     int t;
     double ms;
@@ -115,7 +125,6 @@ void torch_times(const std::vector<std::pair<std::string, int>>& configs, const 
     for (Row& r : rows)
       if (r.config == cfg && r.mode == mode && r.threads == t) r.torch_ms_per_frame = ms;
   }
-  ::pclose(p);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
 #include "engine/run/pipeline.h"
+#include "engine/subprocess.h"
 #include "engine/threads.h"
 #include "weights_tools/network_io.h"
 
@@ -100,19 +101,15 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
   set_threads(saved);
   // PyTorch after ours, never both thread pools at once.
   if (!args.flag("--no-torch")) {
-    if (std::system("/usr/bin/python3 -c 'import torch' >/dev/null 2>&1") != 0) {
+    if (!run_program(Program({"/usr/bin/python3", "-c", "import torch"})).ok()) {
       err << "no PyTorch comparison: /usr/bin/python3 cannot import torch\n";
     } else {
       for (Row& r : rows) {
-        if (r.weights.find('\'') != std::string::npos) continue;  // not quotable in the shell line
-        std::ostringstream cmd;
-        cmd << "cd '" << YELAN_SOURCE_DIR << "' && /usr/bin/python3 benchmarks/torch/pipeline_bench.py --weights '" << r.weights
-            << "' --threads " << r.threads << " --mask-fraction " << r.mask_frac << " 2>/dev/null";
-        FILE* p = ::popen(cmd.str().c_str(), "r");
-        if (!p) continue;
-        char line[256];
-        while (std::fgets(line, sizeof line, p)) std::sscanf(line, "ms_per_tick %lf", &r.torch_ms);
-        ::pclose(p);
+        Program py({"/usr/bin/python3", YELAN_SOURCE_DIR "/benchmarks/torch/pipeline_bench.py", "--weights", r.weights,
+                    "--threads", std::to_string(r.threads), "--mask-fraction", std::to_string(r.mask_frac)});
+        py.capture_stdout = true;
+        std::istringstream lines(run_program(py).out);
+        for (std::string line; std::getline(lines, line);) std::sscanf(line.c_str(), "ms_per_tick %lf", &r.torch_ms);
         err << "  PyTorch " << r.config << " x" << r.threads << ": " << r.torch_ms << " ms per tick of network work\n";
       }
     }

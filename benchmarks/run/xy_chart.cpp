@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "engine/subprocess.h"
+
 namespace yelan::bench {
 
 namespace {
@@ -112,9 +114,11 @@ std::string write_xy_chart(const std::string& svg_path, const std::string& title
   if (svg_path.size() < 4 || svg_path.substr(svg_path.size() - 4) != ".svg") return "";
   const std::string png = svg_path.substr(0, svg_path.size() - 4) + ".png";
   // The PNG is a convenience for READMEs; the SVG is the result.
-  if (std::system("command -v rsvg-convert > /dev/null 2>&1") != 0) return "";
-  const std::string cmd = "rsvg-convert -o '" + png + ".tmp' '" + svg_path + "' 2>/dev/null";
-  if (svg_path.find('\'') != std::string::npos || std::system(cmd.c_str()) != 0) return "";
+  if (!run_program(Program({"rsvg-convert", "-o", png + ".tmp", svg_path})).ok()) {
+    std::error_code ec;
+    std::filesystem::remove(png + ".tmp", ec);
+    return "";
+  }
   std::filesystem::rename(png + ".tmp", png);
   return png;
 }

@@ -22,6 +22,7 @@
 #include "engine/losses.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
+#include "engine/subprocess.h"
 #include "engine/train/batch.h"
 #include "weights_tools/network_io.h"
 #include "weights_tools/weights_file.h"
@@ -248,23 +249,28 @@ Row time_stage(const ModelConfig& cfg, const StageData& d, int steps, int thread
 // two thread pools never share the cores.
 void torch_times(const std::string& data, const std::string& weights, const std::vector<std::string>& stages,
                  const std::vector<int>& threads, int steps, std::vector<Row>& rows, std::ostream& err) {
-  if (std::system("/usr/bin/python3 -c 'import torch, h5py' >/dev/null 2>&1") != 0) {
+  if (!run_program(Program({"/usr/bin/python3", "-c", "import torch, h5py"})).ok()) {
     err << "no PyTorch comparison: /usr/bin/python3 cannot import torch and h5py (scripts/setup-debian --reference)\n";
     return;
   }
-  std::ostringstream cmd;
-  cmd << "cd '" << YELAN_SOURCE_DIR << "' && /usr/bin/python3 benchmarks/torch/train_bench.py --data '" << data
-      << "' --weights '" << weights << "' --steps " << steps << " --warmup " << kWarmup << " --stages ";
-  for (std::size_t i = 0; i < stages.size(); ++i) cmd << (i ? "," : "") << stages[i];
-  cmd << " --threads ";
-  for (std::size_t i = 0; i < threads.size(); ++i) cmd << (i ? "," : "") << threads[i];
-  FILE* p = ::popen(cmd.str().c_str(), "r");
-  if (!p) {
+  std::string stage_list, thread_list;
+  for (const std::string& s : stages) stage_list += std::string(stage_list.empty() ? "" : ",") + s;
+  for (int t : threads) thread_list += std::string(thread_list.empty() ? "" : ",") + std::to_string(t);
+  // Relative paths are the caller's, so the absolute forms go to a script run from the source tree.
+  Program py({"/usr/bin/python3", "benchmarks/torch/train_bench.py", "--data", fs::absolute(data).string(), "--weights",
+              fs::absolute(weights).string(), "--steps", std::to_string(steps), "--warmup", std::to_string(kWarmup),
+              "--stages", stage_list, "--threads", thread_list});
+  py.cwd = YELAN_SOURCE_DIR;
+  py.capture_stdout = true;
+  py.show_stderr = true;
+  const ProgramResult res = run_program(py);
+  if (!res.started) {
     err << "no PyTorch comparison: cannot start /usr/bin/python3\n";
     return;
   }
-  char line[512];
-  while (std::fgets(line, sizeof line, p)) {  // "train STAGE THREADS MS_PER_STEP INITIAL_LOSS"
+  std::istringstream lines(res.out);
+  for (std::string text; std::getline(lines, text);) {  // "train STAGE THREADS MS_PER_STEP INITIAL_LOSS"
+    const char* line = text.c_str();
     char stage[16];
     int t;
     double ms, loss;
@@ -272,8 +278,7 @@ void torch_times(const std::string& data, const std::string& weights, const std:
     for (Row& r : rows)
       if (r.stage == stage && r.threads == t) r.torch = true, r.torch_ms = ms, r.torch_loss = loss;
   }
-  const int status = ::pclose(p);
-  if (status != 0) err << "benchmarks/torch/train_bench.py failed (status " << status << "): see its message above\n";
+  if (!res.ok()) err << "benchmarks/torch/train_bench.py failed (exit code " << res.exit_code << "): see its message above\n";
 }
 
 // The weights file beside the data: DATA.h5 -> DATA.weights.h5.

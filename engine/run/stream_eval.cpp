@@ -43,8 +43,8 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
   using Clock = std::chrono::steady_clock;
   StreamEvalResult r;
   train::PoseMetrics paper, deployed;
-  double tick_ms = 0, tore_ms = 0, s1_ms = 0, s2_ms = 0, crop_area = 0;
-  std::uint64_t crop_runs = 0;
+  double tick_ms = 0, tore_ms = 0, s1_ms = 0, s2_ms = 0;
+  RunStats crops;  // the crop tallies of every scene, for run::crop_share
   for (const SimulatedScene& sc : scenes) {
     const sim::Simulator& simulator = *sc.sim;
     const double end_s = simulator.duration_s();
@@ -81,8 +81,8 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
     r.ticks += st.ticks;
     r.mask_runs += st.mask_runs;
     r.stale += st.stale;
-    crop_area += st.crop_area;
-    crop_runs += st.crop_runs;
+    crops.crop_area += st.crop_area;
+    crops.crop_runs += st.crop_runs;
     tick_ms += total(st.times.tick_ms);
     tore_ms += total(st.times.tore_ms);
     s1_ms += total(st.times.stage1_ms);
@@ -96,7 +96,7 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
   r.tore_ms = tore_ms / timed;
   r.stage1_ms = s1_ms / timed;
   r.stage2_ms = s2_ms / timed;
-  r.crop_share = crop_runs ? crop_area / double(crop_runs) : 1.0;
+  r.crop_share = crop_share(crops);
   return r;
 }
 

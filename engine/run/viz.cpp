@@ -3,12 +3,12 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
 
 #include "camera/repr/preview_png.h"
 #include "camera/sim/preview.h"
+#include "engine/subprocess.h"
 
 namespace yelan::run {
 
@@ -19,11 +19,9 @@ bool RunViz::is_video(const std::string& target) {
   return ext == ".mp4";
 }
 
-bool RunViz::have_ffmpeg() { return std::system("command -v ffmpeg >/dev/null 2>&1") == 0; }
+bool RunViz::have_ffmpeg() { return on_path("ffmpeg"); }
 
 void RunViz::check_target(const std::string& target) {
-  if (target.find('\'') != std::string::npos)
-    throw std::invalid_argument("--viz '" + target + "': a path with a single quote cannot be passed to ffmpeg");
   if (is_video(target) && !have_ffmpeg())
     throw std::invalid_argument("--viz " + target + ": a video needs ffmpeg on PATH (apt-get install ffmpeg); "
                                 "give a directory for PNG frames instead");
@@ -91,10 +89,16 @@ int RunViz::finish() {
   const std::string part = out + ".part.mp4";
   char rate[32];
   std::snprintf(rate, sizeof rate, "%.3f", fps_);
-  const std::string cmd = "ffmpeg -loglevel error -y -framerate " + std::string(rate) + " -i '" + dir_ +
-                          "/pose_%06d.png' -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' '" + part + "'";
+  // ffmpeg reads the input as a frame-number pattern (a literal '%' in the folder is "%%"),
+  // and "file:" keeps a ':' or a leading '-' in a path from reading as a protocol or option.
+  std::string pattern;
+  for (char c : dir_) pattern += c == '%' ? std::string("%%") : std::string(1, c);
+  pattern += "/pose_%06d.png";
+  Program ffmpeg({"ffmpeg", "-loglevel", "error", "-nostdin", "-y", "-framerate", rate, "-f", "image2", "-i", "file:" + pattern, "-pix_fmt", "yuv420p",
+                  "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4", "file:" + part});
+  ffmpeg.show_stderr = true;  // its own reason, when it fails
   std::error_code ec;
-  if (std::system(cmd.c_str()) != 0) {
+  if (!run_program(ffmpeg).ok()) {
     std::filesystem::remove(part, ec);
     std::fprintf(stderr, "yelan: ffmpeg could not make %s (the frames are kept in %s)\n", out.c_str(), dir_.c_str());
     return written_;

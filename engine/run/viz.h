@@ -21,8 +21,7 @@ class RunViz {
 
   static bool is_video(const std::string& target);
   static bool have_ffmpeg();
-  // Throws std::invalid_argument when the target cannot be made: a quote in the path (the
-  // ffmpeg command line quotes it), or a video without ffmpeg.
+  // Throws std::invalid_argument when the target cannot be made: a video without ffmpeg.
   static void check_target(const std::string& target);
 
  private:
