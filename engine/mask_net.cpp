@@ -15,21 +15,12 @@ void zero(const Act& a) { std::memset(a.data, 0, a.floats() * sizeof(float)); }
 // Copies src into dst at (top, left) of every image; the rest of dst is zero (F.pad).
 void pad_into(const Act& src, const Act& dst, int top, int left) {
   zero(dst);
-  for (int n = 0; n < src.n; ++n)
-    for (int b = 0; b < src.cb(); ++b)
-      for (int h = 0; h < src.h; ++h)
-        std::memcpy(dst.data + (((std::size_t(n) * dst.cb() + b) * dst.h + h + top) * dst.w + left) * 16,
-                    src.data + (((std::size_t(n) * src.cb() + b) * src.h + h) * src.w) * 16, std::size_t(src.w) * 64);
+  layers::copy_window(src, 0, 0, dst, top, left, src.h, src.w);
 }
 
 // The adjoint: crops the window back out.
 void crop_from(const Act& big, const Act& small, int top, int left) {
-  for (int n = 0; n < small.n; ++n)
-    for (int b = 0; b < small.cb(); ++b)
-      for (int h = 0; h < small.h; ++h)
-        std::memcpy(small.data + (((std::size_t(n) * small.cb() + b) * small.h + h) * small.w) * 16,
-                    big.data + (((std::size_t(n) * big.cb() + b) * big.h + h + top) * big.w + left) * 16,
-                    std::size_t(small.w) * 64);
+  layers::copy_window(big, top, left, small, 0, 0, small.h, small.w);
 }
 
 }  // namespace

@@ -132,20 +132,11 @@ PoseNet::CropBox PoseNet::forward_cropped(const Act& x, CropBox box, int S) {
   if (!box.empty()) {
     const int ch = box.y1 - box.y0, cw = box.x1 - box.x0;
     const Act in = crop_buf_.get(x.n, x.c, ch, cw);
-    for (int n = 0; n < x.n; ++n)
-      for (int cb = 0; cb < x.cb(); ++cb)
-        for (int y = 0; y < ch; ++y)
-          std::memcpy(in.data + ((std::size_t(n) * in.cb() + cb) * ch + y) * cw * 16,
-                      x.data + (((std::size_t(n) * x.cb() + cb) * H + box.y0 + y) * W + box.x0) * 16,
-                      std::size_t(cw) * 16 * sizeof(float));
+    layers::copy_window(x, box.y0, box.x0, in, 0, 0, ch, cw);
     const Act f = head_forward(in);
     // the crop's feature pixel (i, j) is the frame's (y0/8 + i, x0/8 + j)
     const int oy = box.y0 / 8, ox = box.x0 / 8, fh = std::min(f.h, mid_h_ - oy), fw = std::min(f.w, mid_w_ - ox);
-    for (int n = 0; n < x.n; ++n)
-      for (int cb = 0; cb < f.cb(); ++cb)
-        for (int y = 0; y < fh; ++y)
-          std::memcpy(feats_.data + (((std::size_t(n) * feats_.cb() + cb) * mid_h_ + oy + y) * mid_w_ + ox) * 16,
-                      f.data + ((std::size_t(n) * f.cb() + cb) * f.h + y) * f.w * 16, std::size_t(fw) * 16 * sizeof(float));
+    layers::copy_window(f, 0, 0, feats_, oy, ox, fh, fw);
   }
   cropped_ = true;
   tail_forward(feats_, x.n);

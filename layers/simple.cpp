@@ -115,6 +115,21 @@ void Linear::backward(const float* x, const float* dy, int n, float* dx) {
     }
 }
 
+void copy_window(const Act& src, int sy, int sx, const Act& dst, int dy, int dx, int h, int w) {
+  const auto fits = [](const Act& a, int y, int x, int h, int w) { return y >= 0 && x >= 0 && y + h <= a.h && x + w <= a.w; };
+  if (src.n != dst.n || src.cb() != dst.cb() || h < 0 || w < 0 || !fits(src, sy, sx, h, w) || !fits(dst, dy, dx, h, w))
+    throw std::invalid_argument("copy_window: a " + std::to_string(h) + "x" + std::to_string(w) + " window at (" +
+                                std::to_string(sy) + "," + std::to_string(sx) + ") of " + std::to_string(src.h) + "x" +
+                                std::to_string(src.w) + " does not go to (" + std::to_string(dy) + "," + std::to_string(dx) +
+                                ") of " + std::to_string(dst.h) + "x" + std::to_string(dst.w) + " with the same blocks");
+  for (int n = 0; n < src.n; ++n)
+    for (int b = 0; b < src.cb(); ++b)
+      for (int y = 0; y < h; ++y)
+        std::memcpy(dst.data + (((std::size_t(n) * dst.cb() + b) * dst.h + dy + y) * dst.w + dx) * 16,
+                    src.data + (((std::size_t(n) * src.cb() + b) * src.h + sy + y) * src.w + sx) * 16,
+                    std::size_t(w) * 16 * sizeof(float));
+}
+
 void concat_channels(const Act& a, const Act& b, const Act& y) {
   if (a.n != b.n || a.h != b.h || a.w != b.w || y.c != a.c + b.c || y.h != a.h || y.w != a.w || y.n != a.n)
     throw std::invalid_argument("concat: inputs " + std::to_string(a.c) + "x" + std::to_string(a.h) + "x" + std::to_string(a.w) +

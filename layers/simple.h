@@ -46,6 +46,11 @@ class Linear {
   int in_, out_;
 };
 
+// Copies the h x w window at (sy, sx) of every image and channel block of `src` to (dy, dx)
+// of `dst` (same images and channel blocks, any sizes): padding a map into a larger one,
+// cropping it back out (the adjoint), or pasting a crop's features into the frame's.
+void copy_window(const Act& src, int sy, int sx, const Act& dst, int dy, int dx, int h, int w);
+
 // Channel concatenation [a, b] -> y and its backward split (any channel counts).
 void concat_channels(const Act& a, const Act& b, const Act& y);
 void split_channels(const Act& dy, const Act& da, const Act& db);

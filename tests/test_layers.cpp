@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <random>
 
@@ -229,6 +230,35 @@ TEST_CASE("activations, pooling, linear and concatenation: gradients by finite d
     for (std::size_t i = 0; i < a.act.floats(); ++i) REQUIRE(da.mem[i] == a.mem[i]);
     for (std::size_t i = 0; i < b.act.floats(); ++i) REQUIRE(db.mem[i] == b.mem[i]);
   }
+}
+
+TEST_CASE("copy_window moves a window between maps of any size, element by element, and refuses one that does not fit", "[layers][simple]") {
+  struct Case { int n, c, sh, sw, dh, dw, sy, sx, dy, dx, h, w; };
+  for (const Case& k : {Case{1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 1, 1}, Case{2, 17, 7, 3, 33, 44, 2, 1, 30, 40, 3, 2},
+                        Case{1, 33, 33, 44, 7, 17, 13, 5, 0, 3, 7, 14}, Case{3, 16, 5, 5, 5, 5, 0, 0, 0, 0, 5, 5},
+                        Case{1, 3, 4, 4, 6, 6, 1, 1, 2, 2, 0, 3}}) {
+    INFO(k.c << " channels, " << k.h << "x" << k.w << " from " << k.sh << "x" << k.sw << " to " << k.dh << "x" << k.dw);
+    Owned src(k.n, k.c, k.sh, k.sw, 31), dst(k.n, k.c, k.dh, k.dw, 32), before(dst.act);
+    std::memcpy(before.mem.data(), dst.mem.data(), dst.mem.size() * sizeof(float));
+    copy_window(src.act, k.sy, k.sx, dst.act, k.dy, k.dx, k.h, k.w);
+    auto at = [](const Owned& o, int n, int c, int y, int x) {
+      return o.mem[((std::size_t(n) * o.act.cb() + c / 16) * o.act.h + y) * o.act.w * 16 + std::size_t(x) * 16 + c % 16];
+    };
+    for (int n = 0; n < k.n; ++n)
+      for (int c = 0; c < k.c; ++c)
+        for (int y = 0; y < k.dh; ++y)
+          for (int x = 0; x < k.dw; ++x) {
+            const bool inside = y >= k.dy && y < k.dy + k.h && x >= k.dx && x < k.dx + k.w;
+            REQUIRE(at(dst, n, c, y, x) == (inside ? at(src, n, c, y - k.dy + k.sy, x - k.dx + k.sx) : at(before, n, c, y, x)));
+          }
+  }
+  Owned a(1, 17, 5, 6), b(1, 17, 4, 4), thin(1, 3, 4, 4), other(2, 17, 4, 4);
+  CHECK_THROWS_AS(copy_window(a.act, 0, 0, b.act, 0, 0, 5, 1), std::invalid_argument);   // too tall for dst
+  CHECK_THROWS_AS(copy_window(a.act, 2, 3, b.act, 0, 0, 3, 4), std::invalid_argument);   // off src's edge
+  CHECK_THROWS_AS(copy_window(a.act, -1, 0, b.act, 0, 0, 1, 1), std::invalid_argument);
+  CHECK_THROWS_AS(copy_window(a.act, 0, 0, thin.act, 0, 0, 1, 1), std::invalid_argument);  // other blocks
+  CHECK_THROWS_AS(copy_window(a.act, 0, 0, other.act, 0, 0, 1, 1), std::invalid_argument); // other images
+  CHECK_NOTHROW(copy_window(a.act, 1, 2, b.act, 0, 0, 4, 4));
 }
 
 TEST_CASE("elementwise mul, same shape and a one-channel gate: gradients by finite differences", "[layers][simple]") {
