@@ -2,6 +2,7 @@
 // a truncated file, bad arguments.
 #include <catch2/catch.hpp>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -102,6 +103,23 @@ TEST_CASE("run: --viz OUT.mp4 encodes the frames into a video with ffmpeg, and i
     CHECK_FALSE(std::filesystem::exists(d / "p.csv"));  // refused before any work
     CHECK_FALSE(std::filesystem::exists(d / (video + ".frames")));
   }
+  // An ffmpeg that fails: the poses are still written, the frames kept, and the message says
+  // why and where they are.
+  std::filesystem::create_directories(d / "bin");
+  std::ofstream(d / "bin/ffmpeg") << "#!/bin/sh\necho 'no encoder here' >&2\nexit 1\n";
+  std::filesystem::permissions(d / "bin/ffmpeg", std::filesystem::perms::owner_all);
+  const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "/usr/bin:/bin";
+  ::setenv("PATH", (d / "bin" + ":" + path).c_str(), 1);
+  const auto f = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "f.mp4", "--out", d / "q.csv"});
+  ::setenv("PATH", path.c_str(), 1);
+  INFO(f.err);
+  CHECK(f.code == 0);
+  CHECK(contains(f.err, "ffmpeg could not make " + (d / "f.mp4") + " (exit code 1): "));
+  CHECK(contains(f.err, " pictures kept in " + (d / "f.mp4.frames")));
+  CHECK(std::filesystem::exists(d / "f.mp4.frames/pose_000000.png"));
+  CHECK_FALSE(std::filesystem::exists(d / "f.mp4"));
+  CHECK_FALSE(std::filesystem::exists(d / "f.mp4.part.mp4"));
+  CHECK(std::filesystem::exists(d / "q.csv"));
 }
 
 TEST_CASE("run: a file ending mid-packet stops cleanly and keeps the poses computed", "[run][cli]") {

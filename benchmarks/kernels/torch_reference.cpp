@@ -61,7 +61,7 @@ TorchTimes torch_conv_times(const std::vector<ConvCase>& cases, const std::vecto
   const std::string text = res.ok() ? res.out : std::string();
   std::remove(tmp.c_str());
   if (text.empty()) {
-    *why = "the PyTorch script failed: /usr/bin/python3 " + script + " < " + tmp;
+    *why = "the PyTorch script failed: /usr/bin/python3 " + script + ": " + (res.ok() ? "no output" : res.why());
     return out;
   }
   for (std::size_t at = text.find('{'); at != std::string::npos; at = text.find('{', at + 1)) {

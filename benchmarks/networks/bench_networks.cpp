@@ -115,7 +115,9 @@ void torch_times(const std::vector<std::pair<std::string, int>>& configs, const 
   py.cwd = YELAN_SOURCE_DIR;
   py.capture_stdout = true;
   py.show_stderr = true;
-  std::istringstream lines(run_program(py).out);
+  const ProgramResult res = run_program(py);
+  if (!res.ok()) err << "benchmarks/torch/net_bench.py failed (" << res.why() << ")\n";
+  std::istringstream lines(res.out);
   for (std::string text; std::getline(lines, text);) {  // "config mode threads ms_per_frame"
     const char* line = text.c_str();
     char cfg[128], mode[32];

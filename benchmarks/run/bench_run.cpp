@@ -108,7 +108,9 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
         Program py({"/usr/bin/python3", YELAN_SOURCE_DIR "/benchmarks/torch/pipeline_bench.py", "--weights", r.weights,
                     "--threads", std::to_string(r.threads), "--mask-fraction", std::to_string(r.mask_frac)});
         py.capture_stdout = true;
-        std::istringstream lines(run_program(py).out);
+        const ProgramResult res = run_program(py);
+        if (!res.ok()) err << "  PyTorch " << r.config << " x" << r.threads << " failed: " << res.why() << "\n";
+        std::istringstream lines(res.out);
         for (std::string line; std::getline(lines, line);) std::sscanf(line.c_str(), "ms_per_tick %lf", &r.torch_ms);
         err << "  PyTorch " << r.config << " x" << r.threads << ": " << r.torch_ms << " ms per tick of network work\n";
       }

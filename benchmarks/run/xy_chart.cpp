@@ -114,7 +114,9 @@ std::string write_xy_chart(const std::string& svg_path, const std::string& title
   if (svg_path.size() < 4 || svg_path.substr(svg_path.size() - 4) != ".svg") return "";
   const std::string png = svg_path.substr(0, svg_path.size() - 4) + ".png";
   // The PNG is a convenience for READMEs; the SVG is the result.
-  if (!run_program(Program({"rsvg-convert", "-o", png + ".tmp", svg_path})).ok()) {
+  // Absolute paths: one starting with '-' would read as an option.
+  const std::string abs_svg = std::filesystem::absolute(svg_path).string(), abs_png = std::filesystem::absolute(png + ".tmp").string();
+  if (!run_program(Program({"rsvg-convert", "-o", abs_png, abs_svg})).ok()) {
     std::error_code ec;
     std::filesystem::remove(png + ".tmp", ec);
     return "";

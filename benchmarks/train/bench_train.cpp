@@ -265,7 +265,7 @@ void torch_times(const std::string& data, const std::string& weights, const std:
   py.show_stderr = true;
   const ProgramResult res = run_program(py);
   if (!res.started) {
-    err << "no PyTorch comparison: cannot start /usr/bin/python3\n";
+    err << "no PyTorch comparison: " << res.why() << "\n";
     return;
   }
   std::istringstream lines(res.out);
@@ -278,7 +278,7 @@ void torch_times(const std::string& data, const std::string& weights, const std:
     for (Row& r : rows)
       if (r.stage == stage && r.threads == t) r.torch = true, r.torch_ms = ms, r.torch_loss = loss;
   }
-  if (!res.ok()) err << "benchmarks/torch/train_bench.py failed (exit code " << res.exit_code << "): see its message above\n";
+  if (!res.ok()) err << "benchmarks/torch/train_bench.py failed (" << res.why() << "): see its message above\n";
 }
 
 // The weights file beside the data: DATA.h5 -> DATA.weights.h5.

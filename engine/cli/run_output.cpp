@@ -124,9 +124,10 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
   } else if (setup_.out) {
     write_poses(*setup_.out, kept_);
   }
-  if (viz_)
-    err << viz_->finish() << (run::RunViz::is_video(*setup_.viz_dir) ? " frames in " : " pictures in ") << *setup_.viz_dir
-        << "\n";
+  if (viz_) {
+    viz_->finish();
+    err << viz_->summary() << "\n";
+  }
   if (setup_.stats_json) {
     const run::RunStats& s = pipe_.stats();
     std::ofstream f(*setup_.stats_json);

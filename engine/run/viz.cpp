@@ -94,22 +94,32 @@ int RunViz::finish() {
   std::string pattern;
   for (char c : dir_) pattern += c == '%' ? std::string("%%") : std::string(1, c);
   pattern += "/pose_%06d.png";
-  Program ffmpeg({"ffmpeg", "-loglevel", "error", "-nostdin", "-y", "-framerate", rate, "-f", "image2", "-i", "file:" + pattern, "-pix_fmt", "yuv420p",
-                  "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4", "file:" + part});
+  Program ffmpeg({"ffmpeg", "-loglevel", "error", "-nostdin", "-y", "-framerate", rate, "-f", "image2", "-i",
+                  "file:" + pattern, "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4",
+                  "file:" + part});
   ffmpeg.show_stderr = true;  // its own reason, when it fails
   std::error_code ec;
-  if (!run_program(ffmpeg).ok()) {
+  if (const ProgramResult r = run_program(ffmpeg); !r.ok()) {
     std::filesystem::remove(part, ec);
-    std::fprintf(stderr, "yelan: ffmpeg could not make %s (the frames are kept in %s)\n", out.c_str(), dir_.c_str());
+    problem_ = "ffmpeg could not make " + out + " (" + r.why() + ")";
     return written_;
   }
   std::filesystem::rename(part, out, ec);
   if (ec) {
-    std::fprintf(stderr, "yelan: cannot move %s to %s: %s\n", part.c_str(), out.c_str(), ec.message().c_str());
+    problem_ = "cannot move " + part + " to " + out + ": " + ec.message();
     return written_;
   }
+  encoded_ = true;
   if (video) std::filesystem::remove_all(dir_, ec);
   return written_;
+}
+
+std::string RunViz::summary() const {
+  const std::string n = std::to_string(written_);
+  if (!video_.empty() && encoded_) return n + " frames in " + video_;
+  const std::string pictures = n + " pictures " + (problem_.empty() ? "in " : "kept in ") + dir_;
+  if (!problem_.empty()) return problem_ + ": " + pictures;
+  return pictures + (encoded_ ? " (and " + dir_ + "/run.mp4)" : "");
 }
 
 }  // namespace yelan::run

@@ -18,6 +18,9 @@ class RunViz {
   void add(const Pose& p, const PosePipeline& pipe);
   // Makes the video (see above); returns how many frames were drawn.
   int finish();
+  // After finish(), what a user should open: the video, or the folder of PNGs when no video
+  // was asked for or ffmpeg failed (the frames are kept).
+  std::string summary() const;
 
   static bool is_video(const std::string& target);
   static bool have_ffmpeg();
@@ -27,6 +30,8 @@ class RunViz {
  private:
   std::string dir_, video_;
   int w_, h_, every_, seen_ = 0, written_ = 0;
+  bool encoded_ = false;  // the video (or DIR/run.mp4) was made
+  std::string problem_;   // why it was not, when ffmpeg was run
   double fps_;
 };
 
