@@ -120,6 +120,13 @@ TEST_CASE("run: --viz OUT.mp4 encodes the frames into a video with ffmpeg, and i
   CHECK_FALSE(std::filesystem::exists(d / "f.mp4"));
   CHECK_FALSE(std::filesystem::exists(d / "f.mp4.part.mp4"));
   CHECK(std::filesystem::exists(d / "q.csv"));
+  // A folder: PNGs, plus run.mp4 beside them when ffmpeg is there; the summary names both.
+  const auto g = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "pics/"});
+  REQUIRE(g.code == 0);
+  CHECK(std::filesystem::exists(d / "pics/pose_000000.png"));
+  CHECK(contains(g.err, " pictures in " + (d / "pics/")));
+  CHECK(std::filesystem::exists(d / "pics/run.mp4") == yelan::run::RunViz::have_ffmpeg());
+  CHECK(contains(g.err, "(and " + (d / "pics/run.mp4") + ")") == yelan::run::RunViz::have_ffmpeg());
 }
 
 TEST_CASE("run: a file ending mid-packet stops cleanly and keeps the poses computed", "[run][cli]") {

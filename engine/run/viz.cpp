@@ -85,7 +85,7 @@ void RunViz::add(const Pose& p, const PosePipeline& pipe) {
 int RunViz::finish() {
   const bool video = !video_.empty();
   if (written_ == 0 || (!video && !have_ffmpeg())) return written_;
-  const std::string out = video ? video_ : dir_ + "/run.mp4";
+  const std::string out = video ? video_ : (std::filesystem::path(dir_) / "run.mp4").string();
   const std::string part = out + ".part.mp4";
   char rate[32];
   std::snprintf(rate, sizeof rate, "%.3f", fps_);
@@ -119,7 +119,7 @@ std::string RunViz::summary() const {
   if (!video_.empty() && encoded_) return n + " frames in " + video_;
   const std::string pictures = n + " pictures " + (problem_.empty() ? "in " : "kept in ") + dir_;
   if (!problem_.empty()) return problem_ + ": " + pictures;
-  return pictures + (encoded_ ? " (and " + dir_ + "/run.mp4)" : "");
+  return pictures + (encoded_ ? " (and " + (std::filesystem::path(dir_) / "run.mp4").string() + ")" : "");
 }
 
 }  // namespace yelan::run
