@@ -1,9 +1,12 @@
-// What the benchmark harnesses share: the --threads-list option.
+// What the benchmark harnesses share: the --threads-list option and the way they reach
+// the PyTorch reference scripts.
 #pragma once
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "engine/cli/args.h"
+#include "engine/subprocess.h"
 #include "engine/threads.h"
 
 namespace yelan::bench {
@@ -17,6 +20,20 @@ inline std::vector<int> threads_list(const cli::Args& args, const std::string& f
     out.push_back(*n);
   }
   return out;
+}
+
+// Whether Debian's /usr/bin/python3, the PyTorch reference, imports `modules` ("torch",
+// "torch, h5py").
+inline bool reference_python_imports(const std::string& modules) {
+  return run_program(Program({"/usr/bin/python3", "-c", "import " + modules})).ok();
+}
+
+// "1,2": a list as the reference scripts' options take it.
+template <class T>
+std::string comma_list(const std::vector<T>& v) {
+  std::ostringstream o;
+  for (std::size_t i = 0; i < v.size(); ++i) o << (i ? "," : "") << v[i];
+  return o.str();
 }
 
 }  // namespace yelan::bench

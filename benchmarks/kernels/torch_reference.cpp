@@ -7,7 +7,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "engine/subprocess.h"
+#include "benchmarks/bench_util.h"
+
 
 #ifndef YELAN_SOURCE_DIR
 #define YELAN_SOURCE_DIR "."
@@ -33,7 +34,7 @@ TorchTimes torch_conv_times(const std::vector<ConvCase>& cases, const std::vecto
   TorchTimes out;
   const char* env = std::getenv("YELAN_TORCH_SCRIPT");
   const std::string script = env ? env : YELAN_SOURCE_DIR "/benchmarks/torch/conv_bench.py";
-  if (!run_program(Program({"/usr/bin/python3", "-c", "import torch"})).ok()) {
+  if (!reference_python_imports("torch")) {
     *why = "PyTorch is not importable by /usr/bin/python3 (apt-get install python3-torch)";
     return out;
   }

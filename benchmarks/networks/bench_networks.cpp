@@ -10,12 +10,12 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "benchmarks/bench_util.h"
 #include "benchmarks/kernels/timing.h"
 #include "engine/cli/args.h"
 #include "engine/losses.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
-#include "engine/subprocess.h"
 #include "engine/threads.h"
 #include "kernels/cpu.h"
 
@@ -98,13 +98,12 @@ void bench_config(const ModelConfig& cfg, int frames, int threads, int reps, std
 // PyTorch on the same configs and windows (benchmarks/torch/net_bench.py), after ours.
 void torch_times(const std::vector<std::pair<std::string, int>>& configs, const std::vector<int>& threads, int reps,
                  std::vector<Row>& rows, std::ostream& err) {
-  if (!run_program(Program({"/usr/bin/python3", "-c", "import torch"})).ok()) {
+  if (!reference_python_imports("torch")) {
     err << "no PyTorch comparison: /usr/bin/python3 cannot import torch\n";
     return;
   }
-  std::string thread_list;
-  for (int t : threads) thread_list += std::string(thread_list.empty() ? "" : ",") + std::to_string(t);
-  Program py({"/usr/bin/python3", "benchmarks/torch/net_bench.py", "--reps", std::to_string(reps), "--threads", thread_list});
+  Program py({"/usr/bin/python3", "benchmarks/torch/net_bench.py", "--reps", std::to_string(reps), "--threads",
+              comma_list(threads)});
   // Config names resolve against the source tree, where the script runs; a config file the
   // caller named by a relative path goes as an absolute one.
   for (const auto& [c, frames] : configs) {

@@ -101,7 +101,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
   set_threads(saved);
   // PyTorch after ours, never both thread pools at once.
   if (!args.flag("--no-torch")) {
-    if (!run_program(Program({"/usr/bin/python3", "-c", "import torch"})).ok()) {
+    if (!reference_python_imports("torch")) {
       err << "no PyTorch comparison: /usr/bin/python3 cannot import torch\n";
     } else {
       for (Row& r : rows) {

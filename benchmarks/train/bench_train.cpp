@@ -249,17 +249,14 @@ Row time_stage(const ModelConfig& cfg, const StageData& d, int steps, int thread
 // two thread pools never share the cores.
 void torch_times(const std::string& data, const std::string& weights, const std::vector<std::string>& stages,
                  const std::vector<int>& threads, int steps, std::vector<Row>& rows, std::ostream& err) {
-  if (!run_program(Program({"/usr/bin/python3", "-c", "import torch, h5py"})).ok()) {
+  if (!reference_python_imports("torch, h5py")) {
     err << "no PyTorch comparison: /usr/bin/python3 cannot import torch and h5py (scripts/setup-debian --reference)\n";
     return;
   }
-  std::string stage_list, thread_list;
-  for (const std::string& s : stages) stage_list += std::string(stage_list.empty() ? "" : ",") + s;
-  for (int t : threads) thread_list += std::string(thread_list.empty() ? "" : ",") + std::to_string(t);
   // Relative paths are the caller's, so the absolute forms go to a script run from the source tree.
   Program py({"/usr/bin/python3", "benchmarks/torch/train_bench.py", "--data", fs::absolute(data).string(), "--weights",
               fs::absolute(weights).string(), "--steps", std::to_string(steps), "--warmup", std::to_string(kWarmup),
-              "--stages", stage_list, "--threads", thread_list});
+              "--stages", comma_list(stages), "--threads", comma_list(threads)});
   py.cwd = YELAN_SOURCE_DIR;
   py.capture_stdout = true;
   py.show_stderr = true;
