@@ -214,13 +214,12 @@ RecordingWindowStream::RecordingWindowStream(std::vector<std::string> paths, std
 RecordingWindowStream::~RecordingWindowStream() = default;
 
 RecordingWindowStream::Open& RecordingWindowStream::open(std::size_t i) {
-  if (cache_.empty() || cache_[0]->index != i) {
-    cache_.clear();
-    auto o = std::make_unique<Open>(paths_[i], opt_);
-    o->index = i;
-    cache_.push_back(std::move(o));
+  if (!open_ || open_->index != i) {
+    open_.reset();  // one file open at a time
+    open_ = std::make_unique<Open>(paths_[i], opt_);
+    open_->index = i;
   }
-  return *cache_[0];
+  return *open_;
 }
 
 const RecordingInfo& RecordingWindowStream::info(std::size_t i) { return open(i).info; }
@@ -296,7 +295,7 @@ void RecordingWindowStream::seek_window(std::uint64_t k) {
   }
   seq_started_ = false;
   seq_rec_ = 0;
-  cache_.clear();
+  open_.reset();
   k_ = 0;
   SimWindow skip;
   for (std::uint64_t i = 0; i < k; ++i) next(skip);

@@ -60,7 +60,7 @@ class RecordingWindowStream {
   std::uint64_t k_ = 0;              // windows served
   std::size_t seq_rec_ = 0, seq_mask_ = 0;
   bool seq_started_ = false;
-  std::vector<std::unique_ptr<Open>> cache_;
+  std::unique_ptr<Open> open_;  // the one recording open at a time
 };
 
 }  // namespace yelan::camera::sim

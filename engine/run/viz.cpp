@@ -12,12 +12,17 @@
 
 namespace yelan::run {
 
-bool RunViz::is_video(const std::string& target) {
+namespace {
+
+bool is_video(const std::string& target) {
   if (target.size() < 4) return false;
   std::string ext = target.substr(target.size() - 4);
   for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
   return ext == ".mp4";
 }
+
+}  // namespace
+
 
 bool RunViz::have_ffmpeg() { return on_path("ffmpeg"); }
 
@@ -82,9 +87,9 @@ void RunViz::add(const Pose& p, const PosePipeline& pipe) {
   ++written_;
 }
 
-int RunViz::finish() {
+void RunViz::finish() {
   const bool video = !video_.empty();
-  if (written_ == 0 || (!video && !have_ffmpeg())) return written_;
+  if (written_ == 0 || (!video && !have_ffmpeg())) return;
   const std::string out = video ? video_ : (std::filesystem::path(dir_) / "run.mp4").string();
   const std::string part = out + ".part.mp4";
   char rate[32];
@@ -102,16 +107,15 @@ int RunViz::finish() {
   if (const ProgramResult r = run_program(ffmpeg); !r.ok()) {
     std::filesystem::remove(part, ec);
     problem_ = "ffmpeg could not make " + out + " (" + r.why() + ")";
-    return written_;
+    return;
   }
   std::filesystem::rename(part, out, ec);
   if (ec) {
     problem_ = "cannot move " + part + " to " + out + ": " + ec.message();
-    return written_;
+    return;
   }
   encoded_ = true;
   if (video) std::filesystem::remove_all(dir_, ec);
-  return written_;
 }
 
 std::string RunViz::summary() const {

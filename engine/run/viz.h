@@ -16,13 +16,12 @@ class RunViz {
   // fps: the frames' rate in the video (the pose rate over `every`).
   RunViz(const std::string& target, int sensor_width, int sensor_height, int every = 1, double fps = 25);
   void add(const Pose& p, const PosePipeline& pipe);
-  // Makes the video (see above); returns how many frames were drawn.
-  int finish();
+  // Makes the video (see above).
+  void finish();
   // After finish(), what a user should open: the video, or the folder of PNGs when no video
   // was asked for or ffmpeg failed (the frames are kept).
   std::string summary() const;
 
-  static bool is_video(const std::string& target);
   static bool have_ffmpeg();
   // Throws std::invalid_argument when the target cannot be made: a video without ffmpeg.
   static void check_target(const std::string& target);
