@@ -1,7 +1,8 @@
 // The CPU trainer (SPEC section 6): windows of S frames straight from the simulator (no
-// disk) or from labelled recordings on disk, Adam with L2 decay and a step LR schedule, validation on other scenes each epoch
-// with early stopping, occlusion augmentation, a CSV log, and atomic checkpoints every few
-// minutes from which --resume continues bit-exactly.
+// disk) or from labelled recordings on disk, Adam with L2 decay and a step LR schedule,
+// validation on other scenes or recordings each epoch with early stopping, occlusion
+// augmentation, a CSV log, and atomic checkpoints every few minutes from which --resume
+// continues bit-exactly.
 //   stage "mask": the U-Net on TORE, labels the current and N-1 future masks.
 //   stage "pose": the pose net on masked TORE (the mask from a frozen mask net, or the
 //   simulator's true mask when none is given), targets the normalised 3D joints.
