@@ -24,6 +24,7 @@ class Adam {
   double step();
   void zero_grad();
   void end_epoch();  // advances the LR schedule
+  void set_lr(double lr) { lr_ = lr; }  // a schedule computed by the caller (by steps)
   double lr() const { return lr_; }
   std::int64_t steps() const { return t_; }
   int epochs() const { return epochs_; }

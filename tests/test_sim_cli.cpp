@@ -85,9 +85,9 @@ TEST_CASE("yelan sim --splits writes the split files, and --sim @FILE reads them
       if (!l.empty() && l[0] != '#') out.push_back(l);
     return out;
   };
-  CHECK(lines(slurp(d / "splits/train.txt")).size() == 1848);
+  CHECK(lines(slurp(d / "splits/train.txt")).size() == 3696);
   const auto test = lines(slurp(d / "splits/test.txt"));
-  CHECK(test.size() == 432);
+  CHECK(test.size() == 864);
   const auto drawn = lines(slurp(d / "splits/test-seed3-5.txt"));
   REQUIRE(drawn.size() == 5);
   for (const auto& n : drawn) CHECK(std::find(test.begin(), test.end(), n) != test.end());

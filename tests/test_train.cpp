@@ -65,7 +65,7 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   yelan::test::CliTempDir d("train");
   const std::vector<std::string> base = {"train", "--stage", "pose", "--config", "micro", "--sim",
                                          "ben-dance3-front-high-static,lena-dance4-left-medium-dynamic",
-                                         "--epoch-steps", "2", "--val-windows", "1", "--occlusion"};
+                                         "--epoch-steps", "2", "--val-windows", "1", "--occlusion", "--batch", "1"};
   auto run = [&](const std::string& out, const std::string& steps, std::vector<std::string> extra = {}) {
     auto v = base;
     v.insert(v.end(), {"-o", d / out, "--steps", steps});
@@ -125,13 +125,14 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   CHECK_FALSE(std::filesystem::exists(d / "wider.h5"));
   // The trained weights evaluate on held-out test scenes; the JSON has the contract's keys.
   const auto ev = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--sim", "test", "--scenes", "2", "--seconds",
-                                        "0.04", "--seed", "3", "--json", d / "eval.json"});
+                                        "0.04", "--seed", "3", "--history", "0.1", "--json", d / "eval.json"});
   INFO(ev.err);
   REQUIRE(ev.code == 0);
   CHECK(yelan::test::contains(ev.out, "MPJPE"));
   const std::string js = yelan::test::slurp(d / "eval.json");
   for (const char* key : {"\"mpjpe_mm\"", "\"pck150\"", "\"auc\"", "\"mpjpe_root_mm\"", "\"frames\": 4", "\"by_condition\"",
-                          "\"lighting\"", "\"mask_iou\""})
+                          "\"lighting\"", "\"mask_iou\"", "\"floors\"", "\"constant\"", "\"mean_pose_at_hip\"",
+                          "\"per_view_mean_pose_at_hip\"", "\"swap_share_by_view\""})
     CHECK(yelan::test::contains(js, key));
   // Weights and state from different steps (a stop between the two writes) are refused.
   std::filesystem::copy_file(d / "a/best.h5", d / "b/checkpoint.h5", std::filesystem::copy_options::overwrite_existing);
@@ -152,7 +153,7 @@ TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bi
                 .code == 0);
   auto run = [&](const std::string& out, const std::string& steps, std::vector<std::string> extra = {}) {
     std::vector<std::string> v = {"train", "--stage", "pose", "--config", "micro", "--data", d / "rec", "--epoch-steps", "2",
-                                  "--val-windows", "1", "-o", d / out, "--steps", steps};
+                                  "--val-windows", "1", "--batch", "2", "-o", d / out, "--steps", steps};
     v.insert(v.end(), extra.begin(), extra.end());
     return yelan::test::run_cli(v);
   };

@@ -43,11 +43,12 @@ bool parse_background(const std::string& s, SceneConfig::Background& b) {
 }  // namespace
 
 const std::vector<std::string>& train_motions() {
-  static const std::vector<std::string> m = {"05_04", "05_07", "05_14", "05_19", "02_01", "02_03"};
+  static const std::vector<std::string> m = {"05_04", "05_07", "05_14", "05_19", "02_01", "02_03", "05_03",
+                                             "05_05", "05_11", "05_13", "05_15", "05_18", "05_20"};
   return m;
 }
 const std::vector<std::string>& test_motions() {
-  static const std::vector<std::string> m = {"05_16", "93_03"};
+  static const std::vector<std::string> m = {"05_16", "93_03", "05_17", "05_09", "05_10"};
   return m;
 }
 

@@ -233,7 +233,8 @@ void RecordingWindowStream::fill(Open& r, std::size_t first, bool fresh, SimWind
   out.frames.resize(std::size_t(opt_.window));
   if (fresh) {
     r.tore.reset();
-    r.reader->seek(r.info.mask_t[first] - std::llround(opt_.warmup_s * 1e6));
+    const double history = std::max(opt_.warmup_s, opt_.history_s);
+    r.reader->seek(std::max<std::int64_t>(r.info.first_event_us, r.info.mask_t[first] - std::llround(history * 1e6)));
     if (!r.counts.empty()) {
       r.feed(r.info.mask_t[first] - dt);
       std::fill(r.counts.begin(), r.counts.end(), 0.f);

@@ -34,7 +34,7 @@ std::unique_ptr<Motion> make_motion(const SimSpec& spec, const BodyShape& shape)
     }
     DanceParams p = random_dance_params(style);
     p.static_legs = spec.dance_static_legs;
-    return make_procedural_dance(p, shape, style, spec.duration_s + 1.0);
+    return make_procedural_dance(p, shape, style, spec.duration_s + spec.motion_offset_s + 1.0);
   }
   const std::string dir = spec.mocap_dir.empty() ? default_mocap_dir() : spec.mocap_dir;
   const std::filesystem::path path = std::filesystem::path(dir) / (m + ".bvh");
@@ -42,6 +42,16 @@ std::unique_ptr<Motion> make_motion(const SimSpec& spec, const BodyShape& shape)
     throw std::invalid_argument("motion '" + m + "': no " + path.string() +
                                 " (a BVH stem in the mocap folder, or 'dance' for a procedural dance)");
   return load_bvh_motion(path.string(), shape, spec.motion_options);
+}
+
+Character varied_character(const SimSpec& spec) {
+  if (!(spec.height_scale >= 0.7 && spec.height_scale <= 1.3) || !(spec.girth_scale >= 0.6 && spec.girth_scale <= 1.6))
+    throw std::invalid_argument("height scale must be in [0.7, 1.3] and girth scale in [0.6, 1.6]");
+  Character c = character_by_name(spec.character);
+  c.shape.height_mm *= spec.height_scale;
+  c.shape.girth *= spec.girth_scale;
+  if (spec.clothing) c.clothing = *spec.clothing;
+  return c;
 }
 
 SceneConfig seeded_scene(const SimSpec& spec) {
@@ -63,11 +73,14 @@ std::string default_mocap_dir() {
 
 Simulator::Simulator(const SimSpec& spec)
     : spec_(spec),
-      character_(character_by_name(spec.character)),
+      character_(varied_character(spec)),
       motion_(make_motion(spec, character_.shape)),
       dresser_(character_, sub_seed(spec.seed, kDresserStream)),
       scene_(seeded_scene(spec)),
       pixel_(scene_.camera().width, scene_.camera().height, spec.pixel, sub_seed(spec.seed, kPixelStream)) {
+  if (!(spec.motion_begin >= 0 && spec.motion_begin < spec.motion_end && spec.motion_end <= 1) ||
+      !(spec.motion_offset_s >= 0 && spec.motion_offset_s < 1e6))
+    throw std::invalid_argument("motion segment must satisfy 0 <= begin < end <= 1 and the offset be >= 0 s");
   if (!(spec.duration_s > 0) || spec.duration_s > 24 * 3600)
     throw std::invalid_argument("duration must be in (0 s, 24 h], got " + std::to_string(spec.duration_s));
   if (!(spec.label_hz >= 1 && spec.label_hz <= 10000) || !(spec.mask_hz >= 1 && spec.mask_hz <= 1000))
@@ -96,11 +109,15 @@ double Simulator::image_speed(const BodyPose& a, const BodyPose& b, double dt) c
 }
 
 double Simulator::motion_time(double t_s) const {
-  // Past its end a clip plays backwards, then forwards again: positions stay continuous.
-  const double d = motion_->duration_s();
-  if (!(d > 0) || t_s <= d) return t_s;
-  const double m = std::fmod(t_s, 2 * d);
-  return m <= d ? m : 2 * d - m;
+  // Past its end a segment plays backwards, then forwards again: positions stay continuous.
+  const double full = motion_->duration_s();
+  if (!(full > 0)) return t_s;
+  const double a = spec_.motion_begin * full, d = (spec_.motion_end - spec_.motion_begin) * full;
+  const double u = t_s + spec_.motion_offset_s;
+  if (!(d > 0)) return a;
+  if (u <= d) return a + u;
+  const double m = std::fmod(u, 2 * d);
+  return a + (m <= d ? m : 2 * d - m);
 }
 
 void Simulator::sample(double t_s) {
@@ -226,6 +243,9 @@ std::string Simulator::description_json() const {
       {"motion", spec_.motion},
       {"speed", spec_.motion_options.speed},
       {"mirror", spec_.motion_options.mirror},
+      {"motion_segment", {spec_.motion_begin, spec_.motion_end}},
+      {"motion_offset_s", spec_.motion_offset_s},
+      {"girth", character_.shape.girth},
       {"view", view_name(sc.view)},
       {"yaw_deg", sc.yaw_deg ? *sc.yaw_deg : view_yaw_deg(sc.view)},
       {"distance_mm", sc.distance_mm},

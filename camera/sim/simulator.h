@@ -7,6 +7,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -27,6 +28,14 @@ struct SimSpec {
   std::string character = "ana";
   std::string motion = "05_04";     // a BVH stem in mocap_dir, or "dance" / "dance<N>" (procedural)
   MotionOptions motion_options;
+  // The part of the clip played (fractions of its length after the speed warp), from
+  // motion_offset_s into it, back and forth past its ends: datasets draw a start anywhere and
+  // hold out a segment of each clip for validation.
+  double motion_begin = 0, motion_end = 1;
+  double motion_offset_s = 0;
+  // Body and clothes varied around the named character (datasets draw them per recording).
+  double height_scale = 1, girth_scale = 1;
+  std::optional<Clothing> clothing;
   bool dance_static_legs = false;   // procedural only: upper body moves, legs stay put
   SceneConfig scene;
   PixelParams pixel = pixel_params_davis346();

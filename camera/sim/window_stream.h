@@ -34,6 +34,9 @@ struct WindowStreamOptions {
   int window = 16;                  // frames per window (S)
   double frame_hz = 50;             // the training frame rate (20 ms)
   double warmup_s = 0.1;            // simulated before the first frame, so TORE has history
+  double history_s = 0;             // recordings: a window's TORE holds the events of up to this
+                                    // long before its first frame (5 s: all that TORE reads, as in
+                                    // `yelan run`); windows still start warmup_s in. 0: warmup_s
   double scene_s = 2.0;             // each scene runs this long before the next one starts
   ToreOptions tore;
   bool shuffle = false;             // scene k is a seeded random pick of the list, not k mod n

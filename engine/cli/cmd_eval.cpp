@@ -17,8 +17,8 @@ namespace yelan::cli {
 std::vector<camera::sim::SimSpec> scenes_from(const std::string& text);  // cmd_train.cpp
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads"},
-               {"--true-mask"});
+  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history"},
+               {"--true-mask", "--no-floors"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
@@ -28,6 +28,9 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
   spec.seconds_per_scene = std::stod(a.value_or("--seconds", "1"));
   spec.true_mask = a.flag("--true-mask");
+  spec.floors = !a.flag("--no-floors");
+  spec.history_s = std::stod(a.value_or("--history", "5"));
+  if (!(spec.history_s >= 0 && spec.history_s <= 60)) throw UsageError("--history: expected 0-60 seconds");
   if (data) {
     try {
       spec.recordings = camera::sim::list_recordings(*data);

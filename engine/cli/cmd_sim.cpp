@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "camera/io/event_writer.h"
+#include "camera/sim/dataset.h"
 #include "camera/sim/preview.h"
 #include "camera/sim/presets.h"
 #include "camera/sim/rng.h"
@@ -178,6 +179,33 @@ int run_grid(const std::string& which, const Args& a, std::ostream& out, std::os
   return kOk;
 }
 
+// `yelan sim --dataset DIR`: train / val / test recordings drawn with augmentation
+// (camera/sim/dataset.h), in parallel, resumable.
+int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::ostream& err) {
+  sim::DatasetSpec d;
+  d.out_dir = dir;
+  const std::string seed = a.value_or("--seed", "1");
+  if (seed.empty() || seed.size() > 15 || seed.find_first_not_of("0123456789") != std::string::npos)
+    throw UsageError("--seed '" + seed + "': expected an integer 0..999999999999999");
+  d.seed = std::stoull(seed);
+  d.train = a.int_value_or("--train", d.train, 0, 1 << 20);
+  d.val = a.int_value_or("--val", d.val, 0, 1 << 20);
+  d.test = a.int_value_or("--test", d.test, 0, 1 << 20);
+  d.duration_s = parse_duration(a.value_or("--duration", "5s"));
+  d.threads = a.int_value_or("--threads", 0, 0, 256);
+  d.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
+  try {
+    const auto t0 = std::chrono::steady_clock::now();
+    const int made = sim::make_dataset(d, err);
+    out << dir << ": " << d.train << " train, " << d.val << " val, " << d.test << " test recordings (" << made
+        << " simulated now in " << std::llround(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count())
+        << " s), manifest " << (std::filesystem::path(dir) / "manifest.json").string() << "\n";
+  } catch (const std::invalid_argument& e) {
+    throw UsageError(e.what());
+  }
+  return kOk;
+}
+
 int list(std::ostream& out) {
   out << "characters (name, height, clothing, split):\n";
   for (const auto& c : sim::characters())
@@ -201,13 +229,15 @@ int list(std::ostream& out) {
 int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("sim", argv,
                {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
-                "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes"},
+                "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes",
+                "--dataset", "--train", "--val", "--test"},
                {"--list", "--quiet", "--force"});
   a.expect_positionals(0, 0);
   if (a.value("--threads")) omp_set_num_threads(a.int_value_or("--threads", 1, 1, 256));
   if (a.flag("--list")) return list(out);
   if (const auto g = a.value("--grid")) return run_grid(*g, a, out, err);
   if (const auto d = a.value("--splits")) return write_splits(*d, a, out);
+  if (const auto d = a.value("--dataset")) return run_dataset(*d, a, out, err);
   const auto preset = a.value("--preset"), config = a.value("--config");
   if (bool(preset) == bool(config)) throw UsageError("sim needs exactly one of --preset NAME and --config scene.json");
   sim::SimSpec spec;

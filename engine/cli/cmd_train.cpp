@@ -2,6 +2,7 @@
 // read from labelled recordings on disk.
 #include <unistd.h>
 
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -51,7 +52,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   const Args a("train", argv,
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
-                "--val-windows", "--lr-step-epochs"},
+                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history"},
                {"--occlusion", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
@@ -74,8 +75,15 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
     if (const auto v = a.value("--val-sim")) spec.val_scenes = scenes_from(*v);
   } else {
     try {
-      const auto all = camera::sim::list_recordings(*data);
-      if (const auto v = a.value("--val-data")) {
+      namespace fs = std::filesystem;
+      // A dataset folder (`yelan sim --dataset`): its train/ and val/ splits.
+      const bool dataset = !a.value("--val-data") && fs::is_directory(fs::path(*data) / "train") &&
+                           fs::is_directory(fs::path(*data) / "val");
+      const auto all = camera::sim::list_recordings(dataset ? (fs::path(*data) / "train").string() : *data);
+      if (dataset) {
+        spec.data = all;
+        spec.val_data = camera::sim::list_recordings((fs::path(*data) / "val").string());
+      } else if (const auto v = a.value("--val-data")) {
         spec.data = all;
         spec.val_data = camera::sim::list_recordings(*v);
       } else {
@@ -85,18 +93,24 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
       throw UsageError(std::string("--data: ") + e.what());
     }
     err << spec.data.size() << " recordings for training, " << spec.val_data.size() << " for validation ("
-        << (a.value("--val-data") ? "--val-data" : "every tenth by name, split by recording") << ")\n";
+        << (a.value("--val-data") ? "--val-data" : spec.val_data.size() && spec.val_data[0].find("/val/") != std::string::npos ? "the dataset's val split" : "every tenth by name, split by recording") << ")\n";
   }
   spec.out_dir = *o;
   spec.steps = a.int_value_or("--steps", 1000, 1, 1 << 30);
-  spec.batch = a.int_value_or("--batch", 1, 1, 1024);
+  spec.batch = a.int_value_or("--batch", 8, 1, 1024);
   spec.steps_per_epoch = a.int_value_or("--epoch-steps", 50, 1, 1 << 30);
   spec.patience = a.int_value_or("--patience", 10, 1, 1 << 20);
-  spec.val_windows = a.int_value_or("--val-windows", 4, 1, 1 << 20);
+  spec.val_windows = a.int_value_or("--val-windows", data ? 48 : 16, 1, 1 << 20);
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
   spec.adam.lr = std::stod(a.value_or("--lr", "1e-3"));
   spec.adam.step_size = a.int_value_or("--lr-step-epochs", spec.stage == "mask" ? 5 : 10, 1, 1 << 20);
   spec.adam.weight_decay = 1e-5;
+  spec.lr_schedule = a.value_or("--lr-schedule", "cosine");
+  if (spec.lr_schedule != "cosine" && spec.lr_schedule != "step")
+    throw UsageError("--lr-schedule '" + spec.lr_schedule + "': expected cosine or step");
+  spec.warmup_steps = a.int_value_or("--warmup-steps", std::min<int>(100, int(spec.steps / 10)), 0, 1 << 30);
+  spec.history_s = std::stod(a.value_or("--history", "5"));
+  if (!(spec.history_s >= 0 && spec.history_s <= 60)) throw UsageError("--history: expected 0-60 seconds");
   spec.occlusion = a.flag("--occlusion");
   spec.mask_weights = a.value_or("--mask-weights", "");
   spec.init_weights = a.value_or("--init", "");

@@ -33,6 +33,7 @@ const std::vector<Command>& commands() {
        "                 [--preview DIR [--preview-every 5]] [--threads T] [--quiet]\n"
        "       yelan sim --grid train|test|all --out-dir DIR [--duration 2s] [--seed N] [--limit N]\n"
        "                 [--characters a,b] [--motions m,..] [--views v,..] [--lights l,..] [--backgrounds b,..] [--force]\n"
+       "       yelan sim --dataset DIR [--seed N] [--train 400] [--val 40] [--test 60] [--duration 5s] [--threads T]\n"
        "       yelan sim --list\n"
        "A character performs a CMU clip or a procedural dance in a scene; a ray caster renders\n"
        "it at an adaptive rate (>= 1 kHz) and a v2e-style pixel model makes the events. OUT holds\n"
@@ -40,12 +41,19 @@ const std::vector<Command>& commands() {
        "(50 Hz) and the scene as attributes; the same arguments give the same bytes.\n"
        "Presets: <character>-<motion>-<view>-<light>-<bg> or <view>-<light>-<bg> (see --list).\n"
        "--grid writes one recording per grid member (existing files are kept unless --force)\n"
-       "and DIR/manifest.json. --preview writes PNG frames and a contact sheet.\n",
+       "and DIR/manifest.json. --preview writes PNG frames and a contact sheet.\n"
+       "--dataset writes DIR/{train,val,test}/*.yelan.h5 and DIR/manifest.json: whole clips with\n"
+       "augmentation drawn per recording (mirror, speed 0.7-1.4x, start anywhere, yaw +-25 deg,\n"
+       "distance, height, body and clothes, lighting, background, flicker, occluders); val holds\n"
+       "out two training characters and the last 15% of each training clip, test uses the test\n"
+       "characters and clips. Parallel over --threads (default: all cores); resumable (done\n"
+       "files are kept); the same seed gives the same files.\n",
        cmd_sim, "the motion-to-event simulator (issue 6)"},
       {"train", "train the mask or pose network on CPU",
        "usage: yelan train --stage mask|pose --config NAME|FILE --sim PRESETS|train -o OUTDIR\n"
        "       yelan train --stage mask|pose --config NAME|FILE --data DIR [--val-data DIR] -o OUTDIR\n"
-       "                   [--steps 1000] [--batch 1] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
+       "                   [--steps 1000] [--batch 8] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
+       "                   [--lr-schedule cosine|step] [--warmup-steps N] [--history 5] [--val-windows N]\n"
        "                   [--occlusion] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
        "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
        "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
@@ -54,22 +62,30 @@ const std::vector<Command>& commands() {
        "(the mask from --mask-weights, frozen, or else the simulator's true mask).\n"
        "--data DIR: windows from the labelled recordings in DIR (*.yelan.h5, as yelan sim\n"
        "writes them) instead, frames on their mask times; validation on every tenth\n"
-       "recording by name (split by recording, never by frame) or on --val-data DIR.\n"
-       "Adam (L2 1e-5), LR halved every 5 (mask) / 10 (pose) epochs, validation on other\n"
+       "recording by name (split by recording, never by frame) or on --val-data DIR; a dataset\n"
+       "folder (yelan sim --dataset) trains on DIR/train and validates on DIR/val. A window's TORE\n"
+       "holds the events of up to --history seconds before it (5: all TORE reads, as yelan run).\n"
+       "Adam (L2 1e-5); LR: cosine from --lr to 2% of it by step (after --warmup-steps), or\n"
+       "--lr-schedule step: halved every 5 (mask) / 10 (pose) epochs; validation on other\n"
        "recordings each epoch, early stop after --patience 10 epochs. OUTDIR gets log.csv,\n"
        "checkpoint.h5 + checkpoint.state (atomic, every --checkpoint-minutes and at the end),\n"
        "best.h5 and final.h5; --resume continues from the checkpoint bit-exactly.\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
-       "                  [--true-mask] [--json OUT] [--threads T]\n"
+       "                  [--true-mask] [--history 5] [--no-floors] [--json OUT] [--threads T]\n"
        "Both networks as deployed on simulated scenes: --sim test draws M scenes of the test\n"
        "split (held-out characters and motions; views, lightings and backgrounds in turn)\n"
-       "with seed N, so anyone can check a model on scenes it never saw. --data DIR: the\n"
-       "labelled recordings in DIR (*.yelan.h5), up to --seconds of each. Joints are\n"
-       "denormalised with the true head depth (the paper protocol). Prints MPJPE, PCK@150,\n"
-       "AUC (also root-aligned), per joint and per condition, and the mask IoU; --json OUT\n"
-       "writes mpjpe_mm, pck150, auc, mpjpe_root_mm, frames, by_condition, ....\n",
+       "with seed N, each starting anywhere in its clip after --history s of events, so anyone\n"
+       "can check a model on scenes it never saw. --data DIR: the labelled recordings in DIR\n"
+       "(*.yelan.h5), up to --seconds of each. A window's TORE holds the events of up to\n"
+       "--history s before it (5: all TORE reads, as yelan run). Joints are denormalised with\n"
+       "the true head depth (the paper protocol). Prints MPJPE, PCK@150, AUC (also\n"
+       "root-aligned), per joint (n/a: never visible) and per condition, the mask IoU, the\n"
+       "floors (trivial predictors on the same frames: constant, mean_pose_at_hip,\n"
+       "per_view_mean_pose_at_hip) and per view the share of frames where swapping left and\n"
+       "right would be better; --json OUT writes mpjpe_mm, pck150, auc, mpjpe_root_mm,\n"
+       "frames, by_condition, floors, swap_share_by_view, ....\n",
        cmd_eval, "evaluation (issue 7)"},
       {"convert", "convert an event file between formats",
        "usage: yelan convert IN OUT [--camera N]\n"

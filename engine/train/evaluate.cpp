@@ -1,6 +1,8 @@
 #include "engine/train/evaluate.h"
 
 #include <cmath>
+#include <map>
+#include <optional>
 #include <functional>
 #include <iomanip>
 #include <nlohmann/json.hpp>
@@ -51,6 +53,9 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   std::map<std::string, std::map<std::string, PoseMetrics>> cond;
   double inter = 0, uni = 0;
   BatchBuilder builder(cfg, 1, spec.true_mask ? MaskSource::truth : MaskSource::net);
+  std::optional<Floors> floors;
+  if (spec.floors) floors.emplace(training_floor_stats());
+  SwapShare swaps;
   // One scene or recording: `windows` windows from `next`, scored under `conditions`.
   auto score = [&](int windows, const std::function<void(sim::SimWindow&)>& next,
                    const std::map<std::string, std::string>& conditions) {
@@ -72,6 +77,10 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         std::copy_n(&b.valid_u8[std::size_t(t) * kJoints], kJoints, valid.begin());
         all.add(pred, b.truth_mm[std::size_t(t)], valid);
         for (const auto& [name, value] : conditions) cond[name][value].add(pred, b.truth_mm[std::size_t(t)], valid);
+        const auto view = conditions.find("view");
+        const std::string view_name = view != conditions.end() ? view->second : "";
+        if (floors) floors->add(b.truth_mm[std::size_t(t)], valid, b.k, b.z_ref[std::size_t(t)], view_name);
+        swaps.add(pred, b.truth_mm[std::size_t(t)], valid, view_name.empty() ? "unknown" : view_name);
       }
       // Stage 1 IoU: the current mask (binarised at 0.1) against the true mask, at the net's size.
       if (builder.source() == MaskSource::net) {
@@ -96,12 +105,16 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   o.window = cfg.window;
   o.counts = cfg.representation == "counts";
   o.warmup_s = 0.1;
+  o.history_s = spec.history_s;
   const int max_windows = std::max(1, int(std::floor(spec.seconds_per_scene * o.frame_hz / cfg.window)));
   const std::size_t total = spec.scenes.size() + spec.recordings.size();
   for (std::size_t i = 0; i < spec.scenes.size(); ++i) {
-    const sim::SimSpec& s = spec.scenes[i];
+    sim::SimSpec s = spec.scenes[i];
     sim::WindowStreamOptions so = o;
-    so.scene_s = o.warmup_s + max_windows * cfg.window / o.frame_hz + 1e-6;
+    // Anywhere in the clip, after history_s of events (a procedural dance has no clip end).
+    if (s.motion.rfind("dance", 0) != 0) s.motion_offset_s = 30 * sim::uniform01(spec.seed, 0x0ff5e7, i);
+    so.warmup_s = std::max(o.warmup_s, spec.history_s);
+    so.scene_s = so.warmup_s + max_windows * cfg.window / o.frame_hz + 1e-6;
     sim::SimWindowStream stream({s}, sim::hash64(spec.seed, 0xe7a1, i), so);
     const sim::Character& ch = sim::character_by_name(s.character);
     score(max_windows, [&](sim::SimWindow& w) { stream.next(w); },
@@ -137,6 +150,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   for (const auto& [name, values] : cond)
     for (const auto& [value, m] : values) res.by_condition[name][value] = m.scores();
   res.scenes = total;
+  if (floors) res.floors = floors->scores();
+  res.swap_share_by_view = swaps.by_view();
   return res;
 }
 
@@ -155,8 +170,16 @@ std::string eval_json(const EvalResult& r) {
   j["scenes"] = r.scenes;
   j["mask_iou"] = r.mask_iou;
   nlohmann::ordered_json pj;
-  for (int i = 0; i < kJoints; ++i) pj[kJointNames[i]] = r.all.mpjpe_per_joint[std::size_t(i)];
+  for (int i = 0; i < kJoints; ++i)
+    pj[kJointNames[i]] = r.all.joint_frames[std::size_t(i)] ? nlohmann::ordered_json(r.all.mpjpe_per_joint[std::size_t(i)])
+                                                            : nlohmann::ordered_json(nullptr);  // never visible: n/a
   j["mpjpe_per_joint_mm"] = pj;
+  nlohmann::ordered_json fj = nlohmann::ordered_json::object();
+  for (const auto& [name, s] : r.floors) fj[name] = scores_json(s);
+  j["floors"] = fj;
+  nlohmann::ordered_json sj = nlohmann::ordered_json::object();
+  for (const auto& [view, share] : r.swap_share_by_view) sj[view] = share;
+  j["swap_share_by_view"] = sj;
   nlohmann::ordered_json bc;
   for (const auto& [name, values] : r.by_condition)
     for (const auto& [value, s] : values) bc[name][value] = scores_json(s);
@@ -172,8 +195,20 @@ std::string eval_table(const EvalResult& r) {
     << std::setprecision(1) << "; root-aligned: MPJPE " << r.all.mpjpe_root_mm << " mm, PCK@150 " << std::setprecision(3)
     << r.all.pck150_root << ", AUC " << r.all.auc_root << "; mask IoU " << r.mask_iou << "\n";
   o << std::setprecision(1) << "per joint (mm):";
-  for (int i = 0; i < kJoints; ++i) o << " " << kJointNames[i] << " " << r.all.mpjpe_per_joint[std::size_t(i)];
+  for (int i = 0; i < kJoints; ++i) {
+    o << " " << kJointNames[i] << " ";
+    if (r.all.joint_frames[std::size_t(i)]) o << r.all.mpjpe_per_joint[std::size_t(i)];
+    else o << "n/a";
+  }
   o << "\n";
+  if (!r.floors.empty()) {
+    o << "floors on the same frames (MPJPE / root-aligned mm):";
+    for (const auto& [name, s] : r.floors) o << "  " << name << " " << s.mpjpe_mm << " / " << s.mpjpe_root_mm;
+    o << "\n";
+  }
+  o << "left/right swap would be better on:";
+  for (const auto& [view, share] : r.swap_share_by_view) o << "  " << view << " " << std::setprecision(0) << share * 100 << "%";
+  o << std::setprecision(1) << " of frames\n";
   for (const auto& [name, values] : r.by_condition) {
     o << name << ":";
     for (const auto& [value, s] : values) o << "  " << value << " " << s.mpjpe_mm << " mm (" << s.frames << " frames)";

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "camera/sim/simulator.h"
+#include "engine/train/floors.h"
 #include "engine/train/metrics.h"
 
 namespace yelan::train {
@@ -20,6 +21,10 @@ struct EvalSpec {
   std::uint64_t seed = 1;
   double seconds_per_scene = 1.0;
   bool true_mask = false;  // multiply by the simulator's mask instead of the mask net's
+  // A window's TORE holds the events of up to this long before it (5 s: all TORE reads, as in
+  // `yelan run`); simulated scenes start anywhere in their clip and run this long first.
+  double history_s = 5;
+  bool floors = true;      // score the trivial predictors (floors.h) on the same frames
 };
 
 struct EvalResult {
@@ -29,6 +34,8 @@ struct EvalResult {
   std::map<std::string, std::map<std::string, PoseScores>> by_condition;
   std::string config;
   std::uint64_t scenes = 0;
+  std::map<std::string, PoseScores> floors;         // predictor name -> scores, same frames
+  std::map<std::string, double> swap_share_by_view;  // share of frames better with L/R swapped
 };
 
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err);

@@ -68,7 +68,10 @@ PoseScores PoseMetrics::scores() const {
   s.auc_root = auc(dist_root_);
   s.frames = frames_;
   s.joints = dist_.size();
-  for (int j = 0; j < kJoints; ++j) s.mpjpe_per_joint[j] = joint_n_[j] ? joint_sum_[j] / double(joint_n_[j]) : 0;
+  for (int j = 0; j < kJoints; ++j) {
+    s.mpjpe_per_joint[j] = joint_n_[j] ? joint_sum_[j] / double(joint_n_[j]) : 0;
+    s.joint_frames[j] = joint_n_[j];
+  }
   return s;
 }
 

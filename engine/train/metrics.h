@@ -18,6 +18,7 @@ struct PoseScores {
   double mpjpe_mm = 0, pck150 = 0, auc = 0, mpjpe_root_mm = 0, pck150_root = 0, auc_root = 0;
   std::uint64_t frames = 0, joints = 0;
   std::array<double, kJoints> mpjpe_per_joint{};
+  std::array<std::uint64_t, kJoints> joint_frames{};  // 0: never visible (report n/a, not 0 mm)
 };
 
 class PoseMetrics {

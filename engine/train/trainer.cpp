@@ -31,7 +31,20 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr char kStateMagic[8] = {'Y', 'E', 'L', 'A', 'N', 'T', 'R', 'N'};
-constexpr std::uint32_t kStateVersion = 2;
+constexpr std::uint32_t kStateVersion = 3;
+constexpr const char* kLogHeader = "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s,val_mpjpe_mm,cpu_s";
+constexpr int kLogCommas = 9;
+
+// The learning rate at a step under the spec's schedule (cosine: a function of the step
+// alone, so --resume needs nothing more).
+double scheduled_lr(const TrainSpec& s, std::int64_t step) {
+  const double lr0 = s.adam.lr;
+  if (s.warmup_steps > 0 && step < s.warmup_steps) return lr0 * (0.1 + 0.9 * double(step) / s.warmup_steps);
+  const double span = double(std::max<std::int64_t>(1, s.steps - s.warmup_steps));
+  const double u = std::clamp(double(step - s.warmup_steps) / span, 0.0, 1.0);
+  const double lo = lr0 * s.lr_min_ratio;
+  return lo + (lr0 - lo) * 0.5 * (1 + std::cos(3.141592653589793 * u));
+}
 
 struct State {
   std::uint64_t weights_hash = 0;  // of checkpoint.h5: the pair must belong together
@@ -40,6 +53,7 @@ struct State {
   std::int32_t adam_epochs = 0;
   double lr = 0, best_val = 1e30;
   std::int32_t bad_epochs = 0;
+  double cpu_s = 0;  // CPU seconds of every run before this checkpoint (version 3 on)
   std::vector<float> moments;
 };
 
@@ -60,6 +74,7 @@ void save_state(const std::string& path, const State& s) {
     put(o, kStateVersion);
     put(o, s.weights_hash);
     put(o, s.step), put(o, s.adam_t), put(o, s.adam_epochs), put(o, s.lr), put(o, s.best_val), put(o, s.bad_epochs);
+    put(o, s.cpu_s);
     const std::uint64_t n = s.moments.size();
     put(o, n);
     o.write(reinterpret_cast<const char*>(s.moments.data()), std::streamsize(n * sizeof(float)));
@@ -77,11 +92,12 @@ State load_state(const std::string& path, std::size_t expect_moments) {
     throw std::runtime_error(path + ": offset 0: not a yelan trainer state");
   std::uint32_t version;
   get(in, version, path);
-  if (version != kStateVersion) throw std::runtime_error(path + ": trainer state version " + std::to_string(version));
+  if (version != kStateVersion && version != 2) throw std::runtime_error(path + ": trainer state version " + std::to_string(version));
   State s;
   get(in, s.weights_hash, path);
   get(in, s.step, path), get(in, s.adam_t, path), get(in, s.adam_epochs, path), get(in, s.lr, path);
   get(in, s.best_val, path), get(in, s.bad_epochs, path);
+  if (version >= 3) get(in, s.cpu_s, path);
   std::uint64_t n;
   get(in, n, path);
   if (n != expect_moments)
@@ -107,12 +123,12 @@ std::uint64_t file_hash(const std::string& path) {
 
 // The log up to (and including) `step`: a resumed run rewrites what came after the checkpoint.
 void truncate_log(const std::string& path, std::int64_t step) {
-  static const std::string header = "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s";
+  static const std::string header = kLogHeader;
   std::ifstream in(path);
   std::string line, kept = header + "\n";
   while (std::getline(in, line)) {
     // Only whole rows at or before the checkpoint (a crash can cut the last one short).
-    if (line == header || std::count(line.begin(), line.end(), ',') != 7) continue;
+    if (line == header || std::count(line.begin(), line.end(), ',') != kLogCommas) continue;
     std::int64_t at = 0;
     try {
       at = std::stoll(line.substr(0, line.find(',')));
@@ -163,6 +179,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.out_dir.empty()) throw std::invalid_argument("no output folder");
   if (spec.batch < 1 || spec.steps < 1 || spec.steps_per_epoch < 1)
     throw std::invalid_argument("batch, steps and steps per epoch must be >= 1");
+  if (spec.lr_schedule != "cosine" && spec.lr_schedule != "step")
+    throw std::invalid_argument("LR schedule must be cosine or step, got '" + spec.lr_schedule + "'");
+  const bool cosine = spec.lr_schedule == "cosine";
   fs::create_directories(spec.out_dir);
   if (pose_stage && cfg.masked_input && spec.mask_weights.empty() && spec.init_weights.empty())
     err << "note: the pose net learns from the simulator's true masks; the mask group of the files written here is "
@@ -205,7 +224,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     truncate_log(log_path, st.step);
     err << "resuming " << spec.out_dir << " at step " << st.step << "\n";
   } else {
-    std::ofstream(log_path) << "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s\n";
+    std::ofstream(log_path) << kLogHeader << "\n";
   }
 
   // One window per simulated scene: scene k feeds window k, whatever happened before.
@@ -214,6 +233,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   so.window = cfg.window + (pose_stage ? 0 : cfg.n_masks - 1);  // the mask net learns future masks too
   so.warmup_s = 0.1;
   so.scene_s = so.warmup_s + so.window / so.frame_hz + 1e-6;
+  so.history_s = spec.history_s;
   so.shuffle = true;
   so.counts = cfg.representation == "counts";
   WindowSource stream(spec.scenes, spec.data, spec.seed, so);
@@ -223,6 +243,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   BatchBuilder builder(cfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none);
 
   std::ofstream log(log_path, std::ios::app);
+  const std::clock_t cpu_start = std::clock();
+  const double cpu_base = st.cpu_s;
   auto last_ckpt = std::chrono::steady_clock::now();
   const auto start = last_ckpt;
   // Weights first, then the state with the weights' checksum: a stop between the two is
@@ -234,37 +256,72 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     st.adam_epochs = adam.epochs();
     st.lr = adam.lr();
     st.moments = adam.moments();
+    st.cpu_s = cpu_base + double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     save_state(state_path, st);
     last_ckpt = std::chrono::steady_clock::now();
   };
-  // Mean loss of the net in eval mode over the validation windows (fixed for the run).
-  auto validate = [&] {
+  // The validation windows are fixed for the run: built once (inputs behind the frozen mask
+  // net, targets), scored in eval mode at every epoch's end.
+  std::vector<std::unique_ptr<BatchBuilder>> val_batches;
+  auto build_validation = [&] {
     WindowSource vs(val_scenes, spec.val_data, spec.seed ^ 0x7a11da7eull, so);
-    BatchBuilder vb(cfg, 1, builder.source());
+    constexpr int kPer = 4;
+    mask.set_training(false);
+    for (int i = 0; i < spec.val_windows; i += kPer) {
+      const int n = std::min(kPer, spec.val_windows - i);
+      val_batches.push_back(std::make_unique<BatchBuilder>(cfg, n, builder.source()));
+      for (int k = 0; k < n; ++k) {
+        sim::SimWindow w;
+        vs.next(w);
+        val_batches.back()->add(w, mask, nullptr);
+      }
+    }
+  };
+  struct ValScore {
+    double loss = 0, mpjpe_mm = -1;
+  };
+  // Mean loss (and, for the pose stage, MPJPE in mm under the paper protocol) of the net in
+  // eval mode over the validation windows.
+  auto validate = [&] {
+    if (val_batches.empty()) build_validation();
     mask.set_training(false);
     pose.set_training(false);
     double sum = 0;
-    for (int i = 0; i < spec.val_windows; ++i) {
-      sim::SimWindow w;
-      vs.next(w);
-      vb.clear();
-      vb.add(w, mask, nullptr);
-      const Batch& b = vb.batch();
+    PoseMetrics metrics;
+    int windows = 0;
+    for (const auto& vb : val_batches) {
+      const Batch& b = vb->batch();
+      const int nw = b.frames / cfg.window;
       if (pose_stage) {
         pose.forward(b.input.act, cfg.window);
         std::vector<std::array<layers::Act, 3>> dheat;
         std::vector<layers::Floats> store;
-        sum += hpe_loss(pose, cfg.stages, b.target.data(), b.valid.data(), dheat, store).total;
+        sum += hpe_loss(pose, cfg.stages, b.target.data(), b.valid.data(), dheat, store).total * nw;
+        const std::vector<float>& jn = pose.joints();
+        for (int f = 0; f < b.frames; ++f) {
+          Pose13 pred;
+          for (int j = 0; j < kJoints; ++j) {
+            const float* q = &jn[(std::size_t(f) * kJoints + j) * 3];
+            pred[j] = denormalise_joint({q[0], q[1], q[2]}, b.k, b.z_ref[std::size_t(f)]);
+          }
+          std::array<std::uint8_t, kJoints> valid;
+          std::copy_n(&b.valid_u8[std::size_t(f) * kJoints], kJoints, valid.begin());
+          metrics.add(pred, b.truth_mm[std::size_t(f)], valid);
+        }
       } else {
         mask.forward(b.input.act);
         layers::Floats dm(mask.masks().floats());
         std::vector<float> ds;
-        sum += mask_loss(mask, b.labels.act, {dm.data(), mask.masks().n, mask.masks().c, mask.masks().h, mask.masks().w}, ds).total;
+        sum += mask_loss(mask, b.labels.act, {dm.data(), mask.masks().n, mask.masks().c, mask.masks().h, mask.masks().w}, ds).total * nw;
       }
+      windows += nw;
     }
     mask.set_training(!pose_stage);
     pose.set_training(pose_stage);
-    return sum / spec.val_windows;
+    ValScore v;
+    v.loss = sum / windows;
+    if (pose_stage) v.mpjpe_mm = metrics.scores().mpjpe_mm;
+    return v;
   };
 
   mask.set_training(!pose_stage);  // the frozen mask net runs with its running statistics
@@ -276,7 +333,6 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     err << "this run had already stopped early (no better validation loss for " << spec.patience << " epochs)\n";
   }
   const std::int64_t first_step = st.step;
-  const std::clock_t cpu_start = std::clock();
   while (st.step < spec.steps && !result.early_stopped) {
     const auto t0 = std::chrono::steady_clock::now();
     builder.clear();
@@ -288,6 +344,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     }
     const Batch& batch = builder.batch();
     adam.zero_grad();
+    if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
     if (pose_stage) {
       pose.forward(batch.input.act, cfg.window);
       std::vector<std::array<layers::Act, 3>> dheat;
@@ -311,21 +368,26 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double sps = spec.batch * cfg.window / dt;
-    double val = -1;
-    const bool epoch_end = st.step % spec.steps_per_epoch == 0;
+    double val = -1, val_mm = -1;
+    const bool epoch_end = st.step % spec.steps_per_epoch == 0 || st.step == spec.steps;
     if (epoch_end) {
-      val = validate();
+      const ValScore v = validate();
+      val = v.loss, val_mm = v.mpjpe_mm;
       adam.end_epoch();
-      if (val < st.best_val) {
-        st.best_val = val;
+      if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
+      const double crit = pose_stage ? val_mm : val;  // pose: selected by validation MPJPE (mm)
+      if (crit < st.best_val) {
+        st.best_val = crit;
         st.bad_epochs = 0;
         weights::save_weights((fs::path(spec.out_dir) / "best.h5").string(), weights::weights_of(cfg, mp, pp));
       } else {
         ++st.bad_epochs;
       }
     }
+    const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC + cpu_base;
     log << st.step << "," << adam.epochs() << "," << std::setprecision(9) << loss << "," << val << "," << adam.lr() << ","
-        << grad_norm << "," << std::setprecision(4) << sps << "," << wall << "\n";
+        << grad_norm << "," << std::setprecision(4) << sps << "," << wall << "," << val_mm << "," << std::setprecision(6)
+        << cpu << "\n";
     log.flush();
     const double eta = wall / double(st.step - first_step) * double(spec.steps - st.step);
     if (spec.progress_tty)
@@ -335,10 +397,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
           << std::flush;
     if (epoch_end)
       err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
-          << ", validation " << val << " (best " << st.best_val << "), " << sps << " samples/s\n";
-    const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
+          << ", validation " << val << " (best " << st.best_val << ")"
+          << (val_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(val_mm))) + " mm" : "") << ", " << sps
+          << " samples/s, lr " << adam.lr() << "\n";
+    const double run_cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     const bool out_of_time =
-        (spec.max_minutes > 0 && wall > spec.max_minutes * 60) || (spec.max_cpu_minutes > 0 && cpu > spec.max_cpu_minutes * 60);
+        (spec.max_minutes > 0 && wall > spec.max_minutes * 60) || (spec.max_cpu_minutes > 0 && run_cpu > spec.max_cpu_minutes * 60);
     if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_ckpt).count() > spec.checkpoint_minutes * 60 ||
         out_of_time)
       checkpoint();

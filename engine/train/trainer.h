@@ -32,6 +32,15 @@ struct TrainSpec {
   int val_windows = 4;
   int patience = 10;                // epochs without a better validation loss
   AdamOptions adam;
+  // "cosine": from adam.lr (after a linear warm-up of warmup_steps) down to lr_min_ratio x
+  // adam.lr at `steps`, by steps, so the rate anneals within the run whatever its epochs;
+  // "step": halved every adam.step_size epochs (the paper's).
+  std::string lr_schedule = "cosine";
+  int warmup_steps = 100;
+  double lr_min_ratio = 0.02;
+  // Recordings: a window's TORE holds the events of up to this long before its first frame
+  // (5 s: everything TORE reads, as `yelan run` has it).
+  double history_s = 5;
   double checkpoint_minutes = 10;
   bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
   std::string mask_weights;         // pose stage: frozen mask net; empty: the true mask

@@ -149,9 +149,9 @@ TEST_CASE("sim: presets and scene.json", "[sim]") {
   CHECK_THROWS_WITH(spec_from_json(R"({"colour": 1})", "s.json"), Catch::Contains("s.json: unknown key 'colour'"));
   CHECK_THROWS_WITH(spec_from_json(R"({"view": "top"})", "s.json"), Catch::Contains("view 'top'"));
   CHECK_THROWS_WITH(spec_from_json("{", "s.json"), Catch::Contains("s.json: not JSON"));
-  // The grid: 11 training characters x 7 motions x 4 x 3 x 2; 3 held-out x 3 motions x 24.
-  CHECK(grid_presets("train").size() == 11 * 7 * 24);
-  CHECK(grid_presets("test").size() == 3 * 3 * 24 * 2);  // clear and occluded
+  // The grid: 11 training characters x 14 motions x 4 x 3 x 2; 3 held-out x 6 motions x 24.
+  CHECK(grid_presets("train").size() == 11 * 14 * 24);
+  CHECK(grid_presets("test").size() == 3 * 6 * 24 * 2);  // clear and occluded
   const auto f = grid_presets("test", {{"jade"}, {"05_16"}, {"front"}, {}, {"static"}});
   REQUIRE(f.size() == 6);
   CHECK(f[0] == "jade-05_16-front-high-static");

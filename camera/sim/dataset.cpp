@@ -1,0 +1,192 @@
+#include "camera/sim/dataset.h"
+
+#include <omp.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+#include "camera/io/event_writer.h"
+#include "camera/sim/presets.h"
+#include "camera/sim/rng.h"
+
+namespace yelan::camera::sim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Validation holds out one woman and one man of the training cast.
+const std::vector<std::string> kValCharacters = {"hana", "eli"};
+// Training clips give their first 85% to training, the rest to validation.
+constexpr double kTrainSegmentEnd = 0.85;
+
+std::uint64_t split_stream(const std::string& split) {
+  return split == "train" ? 0x7a1 : split == "val" ? 0x7a2 : 0x7a3;
+}
+
+template <class T>
+const T& pick(Rng& r, const std::vector<T>& v) {
+  return v[std::size_t(r.below(int(v.size())))];
+}
+
+}  // namespace
+
+const std::vector<std::string>& dataset_characters(const std::string& split) {
+  static const std::vector<std::string> train = [] {
+    std::vector<std::string> out;
+    for (const auto& c : characters())
+      if (!c.test_only && std::find(kValCharacters.begin(), kValCharacters.end(), c.name) == kValCharacters.end())
+        out.push_back(c.name);
+    return out;
+  }();
+  static const std::vector<std::string> test = [] {
+    std::vector<std::string> out;
+    for (const auto& c : characters())
+      if (c.test_only) out.push_back(c.name);
+    return out;
+  }();
+  if (split == "train") return train;
+  if (split == "val") return kValCharacters;
+  if (split == "test") return test;
+  throw std::invalid_argument("dataset split '" + split + "': expected train, val or test");
+}
+
+SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s) {
+  const std::vector<std::string>& cast = dataset_characters(split);
+  const bool test = split == "test";
+  Rng r(hash64(seed, split_stream(split), std::uint64_t(i)), 0xda7a);
+  SimSpec s;
+  s.character = pick(r, cast);
+  const std::vector<std::string>& clips = test ? test_motions() : train_motions();
+  const bool dance = r.uniform() < 0.25;
+  s.motion = dance ? "dance" : pick(r, clips);
+  s.motion_options.mirror = r.uniform() < 0.5;
+  s.motion_options.speed = r.uniform(0.7, 1.4);
+  if (!dance && split == "train") s.motion_end = kTrainSegmentEnd;
+  if (!dance && split == "val") s.motion_begin = kTrainSegmentEnd;
+  // Where in the (warped) segment the recording starts: anywhere. The clip's length is known
+  // only once loaded, so the offset is a fraction resolved by the simulator's ping-pong
+  // (an offset past the segment's end plays it backwards, still inside the segment).
+  s.motion_offset_s = dance ? 0 : r.uniform(0, 12.0);
+  s.height_scale = r.uniform(0.94, 1.06);
+  s.girth_scale = r.uniform(0.9, 1.12);
+  if (r.uniform() < 0.3) s.clothing = Clothing(r.below(5));
+  const View views[4] = {View::front, View::back, View::left, View::right};
+  s.scene.view = views[r.below(4)];
+  s.scene.yaw_deg = view_yaw_deg(s.scene.view) + r.uniform(-25, 25);
+  s.scene.distance_mm = r.uniform(2800, 4600);
+  s.scene.height_mm = r.uniform(900, 1600);
+  const double l = r.uniform();
+  s.scene.light = l < 0.4 ? LightLevel::high : l < 0.75 ? LightLevel::medium : LightLevel::low;
+  s.scene.background = r.uniform() < 0.5 ? SceneConfig::dynamic : SceneConfig::static_wall;
+  s.scene.flicker = r.uniform() < 0.15;
+  s.scene.occluders = r.uniform() < 0.15;
+  s.duration_s = duration_s;
+  s.seed = r.bits() & 0xffffffffffffull;
+  std::ostringstream name;
+  name << split << "-" << std::setw(5) << std::setfill('0') << i << "-" << s.character << "-" << s.motion << "-"
+       << view_name(s.scene.view) << "-" << light_name(s.scene.light) << "-"
+       << (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static") << (s.scene.occluders ? "-occluded" : "")
+       << (s.scene.flicker ? "-flicker" : "");
+  s.name = name.str();
+  return s;
+}
+
+std::string dataset_file_name(const SimSpec& spec) { return spec.name + ".yelan.h5"; }
+
+int make_dataset(const DatasetSpec& d, std::ostream& err) {
+  if (d.out_dir.empty()) throw std::invalid_argument("dataset: no output folder");
+  if (d.train < 0 || d.val < 0 || d.test < 0 || d.train + d.val + d.test == 0)
+    throw std::invalid_argument("dataset: need a non-negative count per split, and at least one recording");
+  if (!(d.duration_s >= 0.5 && d.duration_s <= 600)) throw std::invalid_argument("dataset: duration must be 0.5-600 s");
+  struct Job {
+    std::string split;
+    SimSpec spec;
+    std::string path;
+  };
+  std::vector<Job> jobs;
+  nlohmann::ordered_json manifest = {{"format", "yelan-dataset-manifest"},
+                                     {"version", 1},
+                                     {"seed", d.seed},
+                                     {"duration_s", d.duration_s},
+                                     {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
+                                     {"characters",
+                                      {{"train", dataset_characters("train")},
+                                       {"val", dataset_characters("val")},
+                                       {"test", dataset_characters("test")}}},
+                                     {"train_segment", {0, kTrainSegmentEnd}},
+                                     {"val_segment", {kTrainSegmentEnd, 1}},
+                                     {"recordings", nlohmann::ordered_json::array()}};
+  for (const auto& [split, n] : {std::pair<std::string, int>{"train", d.train}, {"val", d.val}, {"test", d.test}}) {
+    fs::create_directories(fs::path(d.out_dir) / split);
+    for (int i = 0; i < n; ++i) {
+      Job j{split, dataset_member(split, i, d.seed, d.duration_s), ""};
+      j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
+      jobs.push_back(j);
+    }
+  }
+  std::vector<std::size_t> todo;
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!fs::exists(jobs[i].path)) todo.push_back(i);
+  err << jobs.size() << " recordings, " << (jobs.size() - todo.size()) << " already there, " << todo.size()
+      << " to simulate (" << d.duration_s << " s each)\n";
+  std::atomic<int> done{0};
+  std::mutex mu;
+  std::string failure;
+  const auto start = std::chrono::steady_clock::now();
+  const int threads = d.threads > 0 ? d.threads : omp_get_max_threads();
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+  for (std::size_t k = 0; k < todo.size(); ++k) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (!failure.empty()) continue;
+    }
+    const Job& j = jobs[todo[k]];
+    try {
+      write_recording(j.spec, j.path);
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(mu);
+      if (failure.empty()) failure = j.path + ": " + e.what();
+      continue;
+    }
+    const int n = ++done;
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double eta = wall / n * double(todo.size() - std::size_t(n));
+    std::lock_guard<std::mutex> lock(mu);
+    if (d.progress_tty) {
+      const int width = 30, filled = int(double(n) / double(todo.size()) * width);
+      err << "\r[" << std::string(std::size_t(filled), '#') << std::string(std::size_t(width - filled), ' ') << "] " << n
+          << "/" << todo.size() << "  " << std::fixed << std::setprecision(1) << wall / 60 << " min, ETA "
+          << eta / 60 << " min   " << std::defaultfloat << std::flush;
+    } else {
+      err << "[" << n << "/" << todo.size() << "] " << j.spec.name << "; ETA " << std::llround(eta) << " s\n";
+    }
+  }
+  if (d.progress_tty) err << "\n";
+  if (!failure.empty()) throw std::runtime_error(failure);
+  for (const Job& j : jobs) {
+    const Simulator sim(j.spec);  // cheap without running: gives the scene's description
+    manifest["recordings"].push_back({{"split", j.split},
+                                      {"file", (fs::path(j.split) / dataset_file_name(j.spec)).string()},
+                                      {"scene", nlohmann::json::parse(sim.description_json())}});
+  }
+  const std::string mpath = (fs::path(d.out_dir) / "manifest.json").string();
+  TempFile tmp(mpath);
+  {
+    std::ofstream m(tmp.path());
+    m << manifest.dump(1) << "\n";
+    if (!m) throw std::runtime_error("cannot write " + tmp.path());
+  }
+  tmp.commit();
+  return int(todo.size());
+}
+
+}  // namespace yelan::camera::sim

@@ -1,0 +1,41 @@
+// A dataset made once and reused: train / val / test recordings of whole clips with
+// augmentation drawn per recording (mirrored motion, speed, start anywhere in the clip, yaw /
+// distance / height jitter around the four views, body and clothes varied, lighting,
+// backgrounds, flicker, occluders). The splits never share a body or a stretch of motion:
+//   train: the training characters but two, the first 85% of each training clip, dances;
+//   val:   the two held-out training characters, the last 15% of each training clip,
+//          dances of other styles;
+//   test:  the test characters and clips (../shared/data/mocap/README.md), dances.
+// Member i of a split is a pure function of (seed, split, i): the same command makes the
+// same bytes, done files are kept, so an interrupted run resumes where it stopped.
+#pragma once
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "camera/sim/simulator.h"
+
+namespace yelan::camera::sim {
+
+struct DatasetSpec {
+  std::string out_dir;        // out_dir/{train,val,test}/*.yelan.h5 and out_dir/manifest.json
+  std::uint64_t seed = 1;
+  int train = 400, val = 40, test = 60;
+  double duration_s = 5;
+  int threads = 0;            // recordings simulated at once; 0: all cores
+  bool progress_tty = false;  // a live line (else a line per recording)
+};
+
+// The characters each split draws from.
+const std::vector<std::string>& dataset_characters(const std::string& split);
+
+// Member i of a split: the scene, motion and augmentation, and its file name.
+SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
+std::string dataset_file_name(const SimSpec& spec);
+
+// Simulates what is missing, in parallel, and writes the manifest (every member's scene as
+// JSON, split, file). Returns the number of recordings simulated now.
+int make_dataset(const DatasetSpec& spec, std::ostream& err);
+
+}  // namespace yelan::camera::sim
