@@ -207,8 +207,8 @@ struct RecordingWindowStream::Open {
 RecordingWindowStream::RecordingWindowStream(std::vector<std::string> paths, std::uint64_t seed, WindowStreamOptions options)
     : paths_(std::move(paths)), seed_(seed), opt_(options) {
   if (paths_.empty()) throw std::invalid_argument("recording stream: no recordings");
-  if (opt_.window < 1 || !(opt_.frame_hz > 0) || !(opt_.warmup_s >= 0))
-    throw std::invalid_argument("recording stream: need window >= 1, frame rate > 0, warm-up >= 0");
+  if (opt_.window < 1 || !(opt_.frame_hz > 0) || !(opt_.warmup_s >= 0) || opt_.cursors < 1 || opt_.windows_per_visit < 1)
+    throw std::invalid_argument("recording stream: need window >= 1, frame rate > 0, warm-up >= 0, cursors and windows per visit >= 1");
 }
 
 RecordingWindowStream::~RecordingWindowStream() = default;
@@ -258,8 +258,48 @@ void RecordingWindowStream::fill(Open& r, std::size_t first, bool fresh, SimWind
   }
 }
 
+void RecordingWindowStream::next_from_cursor(SimWindow& out) {
+  const std::size_t S = std::size_t(opt_.window);
+  const std::uint64_t B = std::uint64_t(opt_.cursors), M = std::uint64_t(opt_.windows_per_visit);
+  const std::uint64_t b = k_ % B, step = k_ / B, visit = step / M, j = step % M;
+  if (cursors_.size() != B) cursors_.resize(B);
+  Cursor& c = cursors_[b];
+  if (!c.open || c.visit != visit) {
+    c.open.reset();
+    c.open = std::make_unique<Open>(paths_[hash64(seed_, 0xc0250 + b, visit) % paths_.size()], opt_);
+    c.visit = visit;
+    c.end = 0;
+  }
+  Open& r = *c.open;
+  const std::size_t frames = r.info.mask_t.size() - std::min(r.info.mask_t.size(), r.first_mask);
+  if (frames < S)
+    fail(r.info.path, "too short for a window of " + std::to_string(S) + " frames after " + std::to_string(opt_.warmup_s) +
+                          " s of warm-up");
+  // M slots side by side, one window inside each: increasing times, never overlapping (a
+  // recording too short for M slots gives overlapping picks, each read afresh).
+  const std::size_t slot = frames / M;
+  std::size_t first;
+  bool fresh = true;
+  if (slot >= S) {
+    first = r.first_mask + j * slot + hash64(seed_, 0x5107 + b, visit * M + j) % (slot - S + 1);
+    fresh = first < c.end;  // behind the reader: seek back
+  } else {
+    first = r.first_mask + hash64(seed_, 0x5107 + b, visit * M + j) % (frames - S + 1);
+  }
+  // Read on from the last window: the TORE then equals a fresh one started history_s before
+  // (events older than TORE's tau read 0 either way), so a resumed run is bit-exact.
+  if (!fresh && !r.counts.empty()) {
+    r.feed(r.info.mask_t[first] - std::llround(1e6 / opt_.frame_hz));
+    std::fill(r.counts.begin(), r.counts.end(), 0.f);
+  }
+  fill(r, first, fresh, out);
+  c.end = first + S;
+  ++k_;
+}
+
 void RecordingWindowStream::next(SimWindow& out) {
   const std::size_t S = std::size_t(opt_.window);
+  if (opt_.shuffle && (opt_.cursors > 1 || opt_.windows_per_visit > 1)) return next_from_cursor(out);
   if (opt_.shuffle) {
     const std::size_t i = hash64(seed_, 0x5c3e, k_) % paths_.size();
     Open& r = open(i);
@@ -292,6 +332,7 @@ void RecordingWindowStream::next(SimWindow& out) {
 void RecordingWindowStream::seek_window(std::uint64_t k) {
   if (opt_.shuffle) {
     k_ = k;
+    cursors_.clear();  // reopened on demand: reading on from a file's start equals a seek
     return;
   }
   seq_started_ = false;

@@ -60,7 +60,14 @@ class RecordingWindowStream {
   std::uint64_t k_ = 0;              // windows served
   std::size_t seq_rec_ = 0, seq_mask_ = 0;
   bool seq_started_ = false;
-  std::unique_ptr<Open> open_;  // the one recording open at a time
+  std::unique_ptr<Open> open_;  // the one recording open at a time (one cursor)
+  struct Cursor {
+    std::unique_ptr<Open> open;
+    std::uint64_t visit = ~0ull;
+    std::size_t end = 0;  // the mask index after the last window served
+  };
+  std::vector<Cursor> cursors_;
+  void next_from_cursor(SimWindow& out);
 };
 
 }  // namespace yelan::camera::sim

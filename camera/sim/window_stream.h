@@ -40,6 +40,11 @@ struct WindowStreamOptions {
   double scene_s = 2.0;             // each scene runs this long before the next one starts
   ToreOptions tore;
   bool shuffle = false;             // scene k is a seeded random pick of the list, not k mod n
+  // Recordings, shuffled: `cursors` recordings are open at once and window k comes from
+  // cursor k mod cursors (a batch's windows from different recordings); each visit to a
+  // recording serves `windows_per_visit` windows at seeded times in increasing order, read
+  // in one pass, so the 5 s of history is read once per visit, not once per window.
+  int cursors = 1, windows_per_visit = 1;
   bool counts = false;              // also fill SimFrame::counts (constant-time event frames)
 };
 

@@ -234,6 +234,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   so.warmup_s = 0.1;
   so.scene_s = so.warmup_s + so.window / so.frame_hz + 1e-6;
   so.history_s = spec.history_s;
+  if (spec.history_s * 1e6 >= double(so.tore.tau_us)) {
+    // A batch's windows from `batch` recordings at once, 8 windows per visit read in one
+    // pass: equal, value for value, to seeking each window (events past tau read 0).
+    so.cursors = spec.batch;
+    so.windows_per_visit = 8;
+  }
   so.shuffle = true;
   so.counts = cfg.representation == "counts";
   WindowSource stream(spec.scenes, spec.data, spec.seed, so);
@@ -333,6 +339,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     err << "this run had already stopped early (no better validation loss for " << spec.patience << " epochs)\n";
   }
   const std::int64_t first_step = st.step;
+  double data_s = 0, step_s = 0;  // since the last epoch line: building batches, whole steps
   while (st.step < spec.steps && !result.early_stopped) {
     const auto t0 = std::chrono::steady_clock::now();
     builder.clear();
@@ -342,6 +349,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       sim::Rng occ(spec.seed, 0x0cc1u + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       builder.add(w, mask, spec.occlusion ? &occ : nullptr);
     }
+    data_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const Batch& batch = builder.batch();
     adam.zero_grad();
     if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
@@ -366,6 +374,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     (pose_stage ? static_cast<void>(pose.weights_changed()) : mask.weights_changed());
     ++st.step;
     const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    step_s += dt;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double sps = spec.batch * cfg.window / dt;
     double val = -1, val_mm = -1;
@@ -399,7 +408,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
           << ", validation " << val << " (best " << st.best_val << ")"
           << (val_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(val_mm))) + " mm" : "") << ", " << sps
-          << " samples/s, lr " << adam.lr() << "\n";
+          << " samples/s, lr " << adam.lr() << ", data " << std::lround(100 * data_s / std::max(step_s, 1e-9))
+          << "% of step time\n";
+    if (epoch_end) data_s = step_s = 0;
     const double run_cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     const bool out_of_time =
         (spec.max_minutes > 0 && wall > spec.max_minutes * 60) || (spec.max_cpu_minutes > 0 && run_cpu > spec.max_cpu_minutes * 60);

@@ -1,0 +1,71 @@
+// The dataset's members: a pure function of (seed, split, index); the splits share no body
+// and no stretch of a training clip; augmentation is drawn per recording and varies.
+#include <catch2/catch.hpp>
+
+#include <set>
+
+#include "camera/sim/characters.h"
+#include "camera/sim/dataset.h"
+#include "camera/sim/presets.h"
+
+using namespace yelan::camera::sim;
+
+TEST_CASE("dataset: members are seeded, splits hold out bodies and clip segments, augmentation varies", "[sim]") {
+  const SimSpec a = dataset_member("train", 17, 3, 5.0), b = dataset_member("train", 17, 3, 5.0);
+  CHECK(a.name == b.name);
+  CHECK(a.seed == b.seed);
+  CHECK(a.motion_offset_s == b.motion_offset_s);
+  CHECK(dataset_member("train", 17, 4, 5.0).seed != a.seed);
+  CHECK(dataset_file_name(a) == a.name + ".yelan.h5");
+  std::set<std::string> chars[3], views, motions;
+  int mirrored = 0, n = 0;
+  double speed_lo = 9, speed_hi = 0;
+  const char* splits[3] = {"train", "val", "test"};
+  for (int s = 0; s < 3; ++s)
+    for (int i = 0; i < 200; ++i) {
+      const SimSpec m = dataset_member(splits[s], i, 1, 5.0);
+      chars[s].insert(m.character);
+      CHECK(m.name.rfind(std::string(splits[s]) + "-", 0) == 0);
+      const bool dance = m.motion.rfind("dance", 0) == 0;
+      const auto& clips = s == 2 ? test_motions() : train_motions();
+      if (!dance) CHECK(std::find(clips.begin(), clips.end(), m.motion) != clips.end());
+      // Training clips: the first 85% train, the rest validates.
+      if (!dance && s == 0) CHECK(m.motion_end <= 0.85);
+      if (!dance && s == 1) CHECK(m.motion_begin >= 0.85);
+      if (s == 2) CHECK(character_by_name(m.character).test_only);
+      views.insert(view_name(m.scene.view));
+      motions.insert(m.motion);
+      mirrored += m.motion_options.mirror;
+      speed_lo = std::min(speed_lo, m.motion_options.speed), speed_hi = std::max(speed_hi, m.motion_options.speed);
+      REQUIRE(m.scene.yaw_deg);
+      CHECK(std::abs(*m.scene.yaw_deg - view_yaw_deg(m.scene.view)) <= 25);
+      ++n;
+    }
+  for (const auto& c : chars[1]) CHECK(chars[0].count(c) == 0);  // validation bodies never train
+  for (const auto& c : chars[2]) CHECK(chars[0].count(c) == 0);
+  CHECK(chars[0].size() == dataset_characters("train").size());
+  CHECK(views.size() == 4);
+  CHECK(motions.size() > 10);
+  CHECK(mirrored > n / 3);
+  CHECK(mirrored < 2 * n / 3);
+  CHECK(speed_lo < 0.8);
+  CHECK(speed_hi > 1.3);
+  CHECK_THROWS(dataset_member("holdout", 0, 1, 5.0));
+}
+
+TEST_CASE("dataset: a clip segment and a start offset play inside the segment, back and forth", "[sim]") {
+  SimSpec s = preset_spec("ben-05_04-front-high-static");
+  s.duration_s = 1;
+  const Simulator whole(s);
+  const double len = whole.motion_duration_s();
+  s.motion_begin = 0.5, s.motion_end = 0.6, s.motion_offset_s = 0.02 * len;
+  const Simulator seg(s);
+  // At t = 0 the segment's pose is the whole clip's at 0.52 of its length.
+  const Label a = seg.label_at(0), b = whole.label_at(0.52 * len);
+  CHECK((a.joints_mm[7] - b.joints_mm[7]).norm() < 1e-6);
+  // Past the segment's end it plays backwards: 0.12 len later it is at 0.56.
+  const Label c = seg.label_at(0.12 * len), e = whole.label_at(0.56 * len);
+  CHECK((c.joints_mm[7] - e.joints_mm[7]).norm() < 1e-6);
+  s.motion_begin = 0.7, s.motion_end = 0.6;
+  CHECK_THROWS(Simulator(s));
+}
