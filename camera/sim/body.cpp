@@ -469,6 +469,20 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
     q.ra = hem_.ra;
     q.rb = hem_.r;
   }
+
+  // What tells a front from a back in events: a dark band across the eyes and brows, and a
+  // print on the front of the top in a shade far from the top's own. Added last so the
+  // other parts keep their print seeds.
+  Material brows;
+  brows.albedo = brows.albedo2 = 0.04f;
+  ellipsoid(p[kHead] + head_.fwd * (0.85 * d.head_depth) + head_.up * (0.18 * head_up_), head_, 0.72 * d.head_side,
+            0.25 * d.head_depth, 0.14 * head_up_, brows, p[kHead]);
+  Material front = torso_m;
+  front.pattern = Pattern::plain;
+  front.albedo = front.albedo2 = torso_m.albedo < 0.35f ? 0.85f : 0.04f;
+  ellipsoid(p[kChest] + 0.5 * (p[kNeck] - p[kChest]) + torso_.fwd * (0.8 * torso_scale * d.chest_depth), torso_,
+            0.5 * torso_scale * d.chest_lat_per_shoulder * shoulder_width, 0.3 * d.chest_depth, 0.4 * spine_upper, front,
+            p[kPelvis]);
 }
 
 }  // namespace yelan::camera::sim

@@ -37,7 +37,7 @@ namespace yelan::camera::sim {
 class Dresser {
  public:
   // Upper bound on what primitives() appends (body 22, hair 4, hat 2, cloth 1).
-  static constexpr int kMaxPrimitives = 29;
+  static constexpr int kMaxPrimitives = 31;
 
   // Throws std::invalid_argument when the shape is absurd (height outside 500..3000 mm,
   // girth outside 0.3..3, or not finite).

@@ -83,7 +83,7 @@ std::vector<Primitive> dress_at_rest(const Character& c, const BodyPose& pose,
 }
 
 int expected_count(const Character& c) {
-  return 22 + (c.hair != Hair::bald) + 3 * (c.hair == Hair::long_hair) + 2 * c.hat +
+  return 24 + (c.hair != Hair::bald) + 3 * (c.hair == Hair::long_hair) + 2 * c.hat +
          (c.clothing != Clothing::tight);
 }
 
@@ -466,4 +466,20 @@ TEST_CASE("body dresser: absurd shapes and non-finite poses are refused, state k
   CHECK(same_bytes(d.hem_centre(), hem));
   d.update(rest, 0.02);
   CHECK(d.hem_centre().allFinite());
+}
+
+TEST_CASE("body front cues: a dark brow band on the face and a contrasting print on the chest, in front only") {
+  for (const Character& c : characters()) {
+    INFO(c.name);
+    const BodyPose pose = standing_pose(c.shape.height_mm, c.shape.female);
+    const auto prims = dress_at_rest(c, pose);
+    REQUIRE(prims.size() >= 2);
+    const Primitive& brows = prims[prims.size() - 2];
+    const Primitive& print = prims.back();
+    // The body faces -y at rest: both cues sit in front of the head and the chest.
+    CHECK(brows.a.y() < pose.p[kHead].y() - 40);
+    CHECK(print.a.y() < pose.p[kChest].y() - 40);
+    CHECK(brows.material.albedo < 0.1f);
+    CHECK(std::abs(print.material.albedo - c.top.albedo) > 0.3f);
+  }
 }
