@@ -202,9 +202,9 @@ TEST_CASE("train: baseline inputs: unmasked TORE for masked_input false, log cou
   BatchBuilder b(nomask, 1, MaskSource::truth);
   CHECK(b.source() == MaskSource::unmasked);
   b.add(w, unused, nullptr);
-  OwnedAct want;
+  yelan::input::OwnedAct want;
   want.resize(nomask.window, 6, H, W);
-  for (int t = 0; t < nomask.window; ++t) downscale_tore(w.frames[std::size_t(t)].tore, 260, 346, d, want.act, t);
+  for (int t = 0; t < nomask.window; ++t) yelan::input::downscale_tore(w.frames[std::size_t(t)].tore, 260, 346, d, want.act, t);
   REQUIRE(b.batch().input.act.floats() == want.act.floats());
   CHECK(std::equal(want.act.data, want.act.data + want.act.floats(), b.batch().input.act.data));
   // Counts: 2 planes of log(1 + n), averaged over each d x d cell.
@@ -232,9 +232,9 @@ TEST_CASE("train: downscale_tore is the plain mean of each cell, bit for bit, on
     std::vector<float> vol(std::size_t(C) * sh * sw);
     for (std::size_t i = 0; i < vol.size(); ++i) vol[i] = float(std::sin(0.37 * double(i) + 1.0)) * 1.7f;
     const int H = sh / d, W = sw / d;
-    OwnedAct got;
+    yelan::input::OwnedAct got;
     got.resize(2, C, H, W);
-    downscale_tore(vol, sh, sw, d, got.act, 1);
+    yelan::input::downscale_tore(vol, sh, sw, d, got.act, 1);
     for (int c = 0; c < C; ++c)
       for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {

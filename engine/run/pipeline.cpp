@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "camera/repr/tore.h"
-#include "engine/train/batch.h"
+#include "engine/input.h"
 #include "engine/train/pose_norm.h"
 #include "weights_tools/network_io.h"
 
@@ -60,7 +60,8 @@ struct PosePipeline::Impl {
   RunOptions opt;
   camera::ToreVolume tore;
   std::vector<float> vol;
-  train::OwnedAct frame, unmasked, window;
+  input::OwnedAct frame, unmasked, window;
+  layers::Act last_in{};
   train::Intrinsics k;
   std::int64_t dt_us, next_tick = std::numeric_limits<std::int64_t>::min();
   bool started = false;
@@ -76,7 +77,6 @@ struct PosePipeline::Impl {
   PoseNet::CropBox window_box;          // bidirectional: the union over the window's frames
   // stage 2
   int slot = 0;
-  std::vector<float> ones;  // the "mask" of configs without stage 1
   std::vector<std::int64_t> slot_t;
   std::vector<bool> slot_mask_ran;
   Pose last;
@@ -93,7 +93,6 @@ struct PosePipeline::Impl {
     if (cfg.representation != "tore")
       throw std::invalid_argument(path + ": config '" + cfg.name + "' reads " + cfg.representation +
                                   " frames; yelan run streams TORE only (the other inputs are baselines for yelan eval)");
-    if (!cfg.masked_input) ones.assign(std::size_t(cfg.height()) * cfg.width(), 1.f);
     crop = cfg.masked_input ? (o.crop_margin >= 0 ? o.crop_margin : cfg.crop_margin) : 0;
     if (!(o.rate_hz >= 1 && o.rate_hz <= 1000)) throw std::invalid_argument("rate must be 1..1000 poses per second");
     dt_us = std::llround(1e6 / o.rate_hz);
@@ -192,7 +191,7 @@ struct PosePipeline::Impl {
     layers::NoGrad no_grad;
     auto t0 = Clock::now();
     tore.readout(T, vol.data());
-    train::downscale_tore(vol, tore.height(), tore.width(), cfg.downscale, unmasked.act, 0);
+    input::downscale_tore(vol, tore.height(), tore.width(), cfg.downscale, unmasked.act, 0);
     stats.times.tore_ms.push_back(ms_since(t0));
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
     t0 = Clock::now();
@@ -202,12 +201,8 @@ struct PosePipeline::Impl {
     if (run_mask) {
       nets.mask.forward(unmasked.act);
       const layers::Act& m = nets.mask.masks();
-      const float cut = std::log(0.1f / 0.9f);  // sigmoid > 0.1
-      masks.assign(std::size_t(cfg.n_masks), std::vector<float>(m.pixels()));
-      for (int c = 0; c < cfg.n_masks; ++c) {
-        const float* p = m.data + std::size_t(c / 16) * m.pixels() * 16 + c % 16;
-        for (std::size_t i = 0; i < m.pixels(); ++i) masks[std::size_t(c)][i] = p[i * 16] > cut ? 1.f : 0.f;
-      }
+      masks.resize(std::size_t(cfg.n_masks));
+      for (int c = 0; c < cfg.n_masks; ++c) input::mask_cut(m, 0, c, masks[std::size_t(c)]);
       scores = nets.mask.scores();
       boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
       for (int c = 0; c < cfg.n_masks; ++c) boxes[std::size_t(c)] = bounding_box(masks[std::size_t(c)], m.w, m.h);
@@ -222,13 +217,11 @@ struct PosePipeline::Impl {
     t0 = Clock::now();
     const layers::Act& dst = cfg.bidirectional ? window.act : frame.act;
     const int n = cfg.bidirectional ? slot : 0;
-    const std::size_t plane = unmasked.act.pixels() * 16, per_frame = std::size_t(unmasked.act.cb()) * plane;
+    const std::size_t per_frame = std::size_t(unmasked.act.cb()) * unmasked.act.pixels() * 16;
     in_use = use;
-    const std::vector<float>& keep = cfg.masked_input ? masks[std::size_t(use)] : ones;
-    for (int cb = 0; cb < unmasked.act.cb(); ++cb)
-      for (std::size_t i = 0; i < unmasked.act.pixels(); ++i)
-        for (int l = 0; l < 16; ++l)
-          dst.data[std::size_t(n) * per_frame + cb * plane + i * 16 + l] = unmasked.act.data[cb * plane + i * 16 + l] * keep[i];
+    std::copy_n(unmasked.act.data, per_frame, dst.data + std::size_t(n) * per_frame);
+    if (cfg.masked_input) input::apply_mask(dst, n, masks[std::size_t(use)]);
+    last_in = {dst.data + std::size_t(n) * per_frame, 1, dst.c, dst.h, dst.w};
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;
     const PoseNet::CropBox box = cfg.masked_input ? grown(boxes[std::size_t(use)]) : PoseNet::CropBox{};
@@ -265,6 +258,13 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
     if (!m.started) {
       m.started = true;
       m.next_tick = e.t + m.dt_us;
+      if (m.opt.tick_origin_us) {
+        // The first tick at or after the event.
+        const std::int64_t o = *m.opt.tick_origin_us;
+        m.next_tick = o + (e.t - o) / m.dt_us * m.dt_us;
+        while (m.next_tick < e.t) m.next_tick += m.dt_us;
+        while (m.next_tick - m.dt_us >= e.t) m.next_tick -= m.dt_us;
+      }
     }
     // A gap of more than 2 s (a paused recording): skip to the tick before this event,
     // starting a fresh window and mask, instead of running the networks on empty ticks.
@@ -310,6 +310,7 @@ const std::vector<float>& PosePipeline::last_mask() const {
   static const std::vector<float> none;
   return impl_->masks.empty() ? none : impl_->masks[std::size_t(std::max(0, impl_->in_use))];
 }
+const layers::Act& PosePipeline::last_input() const { return impl_->last_in; }
 int PosePipeline::mask_downscale() const { return impl_->nets.cfg.downscale; }
 double PosePipeline::focal_px() const { return kFocalPx; }
 bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }

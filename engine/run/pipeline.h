@@ -11,11 +11,13 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "camera/event.h"
+#include "layers/param.h"
 
 namespace yelan::run {
 
@@ -27,6 +29,9 @@ struct RunOptions {
   bool skip_empty = true;     // no events since the last tick: repeat the last pose
   int crop_margin = -1;       // stage 2's head on the mask's box grown by this many input
                               // pixels (0: whole frame; -1: the model's pose.crop_margin)
+  // Ticks at origin + k / rate (e.g. 0: on a recording's mask and label times) instead of
+  // one period after the first event.
+  std::optional<std::int64_t> tick_origin_us;
 };
 
 struct Pose {
@@ -72,6 +77,8 @@ class PosePipeline {
   // H x W at the sensor's size), the mask in use (the model's input size) and its downscale.
   const std::vector<float>& last_tore() const;
   const std::vector<float>& last_mask() const;
+  // Stage 2's input of the latest tick: the masked, downscaled TORE (one frame, blocked).
+  const layers::Act& last_input() const;
   int mask_downscale() const;
   double focal_px() const;
 

@@ -4,14 +4,9 @@
 #include <cmath>
 #include <stdexcept>
 
-namespace yelan::train {
+#include "engine/input.h"
 
-void OwnedAct::resize(int n, int c, int h, int w) {
-  const layers::Act a{nullptr, n, c, h, w};
-  if (mem.size() != a.floats()) mem = layers::Floats(a.floats());
-  act = a;
-  act.data = mem.data();
-}
+namespace yelan::train {
 
 BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source)
     : cfg_(cfg), windows_(windows), source_(source != MaskSource::none && !cfg.masked_input ? MaskSource::unmasked : source) {
@@ -38,37 +33,6 @@ const std::vector<float>& input_planes(const ModelConfig& cfg, const camera::sim
   return scratch;
 }
 
-void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
-  const int C = a.c, H = a.h, W = a.w;
-  if (vol.size() != std::size_t(C) * sensor_h * sensor_w || std::size_t(H) * d > std::size_t(sensor_h) ||
-      std::size_t(W) * d > std::size_t(sensor_w))
-    throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values does not fill " +
-                                std::to_string(C) + " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
-  const float inv = 1.f / float(d * d);
-  // Row sums first (contiguous, vectorised), then one strided store per output value into
-  // the 16-lane layout; the additions run in the plain (dy, dx) order, so the result is
-  // bit-identical to summing each cell on its own.
-  std::vector<float> row(static_cast<std::size_t>(W));
-  for (int c = 0; c < C; ++c) {
-    float* out = a.data + (std::size_t(n) * a.cb() + c / 16) * a.pixels() * 16 + c % 16;
-    const float* in = vol.data() + std::size_t(c) * sensor_h * sensor_w;
-    for (int y = 0; y < H; ++y) {
-      const float* r0 = in + std::size_t(y) * d * sensor_w;
-      if (d == 2) {
-        const float* r1 = r0 + sensor_w;
-        for (int x = 0; x < W; ++x) row[std::size_t(x)] = r0[2 * x] + r0[2 * x + 1] + r1[2 * x] + r1[2 * x + 1];
-      } else {
-        std::fill(row.begin(), row.end(), 0.f);
-        for (int dy = 0; dy < d; ++dy)
-          for (int x = 0; x < W; ++x)
-            for (int dx = 0; dx < d; ++dx) row[std::size_t(x)] += r0[std::size_t(dy) * sensor_w + x * d + dx];
-      }
-      float* o = out + std::size_t(y) * W * 16;
-      for (int x = 0; x < W; ++x) o[std::size_t(x) * 16] = row[std::size_t(x)] * inv;
-    }
-  }
-}
-
 namespace {
 
 // Fraction of human pixels in each d x d cell.
@@ -82,14 +46,6 @@ std::vector<float> mask_cells(const std::vector<std::uint8_t>& m, int sensor_w, 
       out[std::size_t(y) * W + x] = float(s) / float(d * d);
     }
   return out;
-}
-
-void multiply_frame(const layers::Act& a, int n, const std::vector<float>& keep) {
-  for (int cb = 0; cb < a.cb(); ++cb) {
-    float* p = a.data + (std::size_t(n) * a.cb() + cb) * a.pixels() * 16;
-    for (std::size_t i = 0; i < a.pixels(); ++i)
-      for (int l = 0; l < 16; ++l) p[i * 16 + l] *= keep[i];
-  }
 }
 
 }  // namespace
@@ -109,12 +65,12 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     const int n = used_ * S + t;
     const auto& f = w.frames[std::size_t(t)];
     const std::vector<float>& planes = input_planes(cfg_, f, planes_);
-    downscale_tore(planes, sh, sw, d, in, n);
-    if (source_ == MaskSource::net) downscale_tore(planes, sh, sw, d, one_.act, t);
+    input::downscale_tore(planes, sh, sw, d, in, n);
+    if (source_ == MaskSource::net) input::downscale_tore(planes, sh, sw, d, one_.act, t);
     if (source_ == MaskSource::truth) {
       auto cells = mask_cells(f.mask, sw, d, H, W);
       for (float& c : cells) c = c > 0 ? 1.f : 0.f;  // any human pixel keeps the cell
-      multiply_frame(in, n, cells);
+      input::apply_mask(in, n, cells);
     }
     if (occ && occ->uniform() < 0.5) {
       const int rects = 1 + occ->below(2);
@@ -124,7 +80,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
         std::vector<float> keep(std::size_t(H) * W, 1.f);
         for (int y = y0; y < std::min(H, y0 + rh); ++y)
           for (int x = x0; x < std::min(W, x0 + rw); ++x) keep[std::size_t(y) * W + x] = 0.f;
-        multiply_frame(in, n, keep);
+        input::apply_mask(in, n, keep);
       }
     }
     // Targets: the joints normalised with the true head depth.
@@ -151,13 +107,10 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
   if (source_ == MaskSource::net) {
     layers::NoGrad no_grad;
     mask_net.forward(one_.act);
-    const layers::Act& m = mask_net.masks();
-    const float cut = std::log(0.1f / 0.9f);  // sigmoid(logit) > 0.1
+    std::vector<float> keep;
     for (int t = 0; t < S; ++t) {
-      std::vector<float> keep(std::size_t(H) * W);
-      const float* p = m.data + std::size_t(t) * m.cb() * m.pixels() * 16;  // channel 0: the current mask
-      for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > cut ? 1.f : 0.f;
-      multiply_frame(in, used_ * S + t, keep);
+      input::mask_cut(mask_net.masks(), t, 0, keep);  // channel 0: the current mask
+      input::apply_mask(in, used_ * S + t, keep);
     }
   }
   ++used_;

@@ -7,6 +7,7 @@
 
 #include "camera/sim/rng.h"
 #include "camera/sim/window_stream.h"
+#include "engine/input.h"
 #include "engine/mask_net.h"
 #include "engine/model_config.h"
 #include "engine/train/metrics.h"
@@ -23,19 +24,11 @@ enum class MaskSource { none, truth, net, unmasked };
 // event counts (the "counts" representation) computed into `scratch`.
 const std::vector<float>& input_planes(const ModelConfig& cfg, const camera::sim::SimFrame& f, std::vector<float>& scratch);
 
-// Mean of each d x d cell of a TORE volume (C x H x W, channel-major, the sensor's size) into
-// frame n of a blocked activation of the model's input size.
-void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n);
 
-struct OwnedAct {
-  layers::Floats mem;
-  layers::Act act;
-  void resize(int n, int c, int h, int w);
-};
 
 struct Batch {
-  OwnedAct input;                    // n = windows x S frames, cfg.channels x H x W
-  OwnedAct labels;                   // mask stage: n x N masks (frame t + k in channel k)
+  input::OwnedAct input;                    // n = windows x S frames, cfg.channels x H x W
+  input::OwnedAct labels;                   // mask stage: n x N masks (frame t + k in channel k)
   std::vector<float> target, valid;  // pose stage: n x 13 x 3 normalised, n x 13
   std::vector<Pose13> truth_mm;      // camera frame, per frame
   std::vector<double> z_ref;         // the head's true depth per frame
@@ -59,7 +52,7 @@ class BatchBuilder {
   int windows_, used_ = 0;
   MaskSource source_;
   Batch b_;
-  OwnedAct one_;  // one window's unmasked input, for the frozen mask net
+  input::OwnedAct one_;  // one window's unmasked input, for the frozen mask net
   std::vector<float> planes_;  // a frame's count planes (TORE is read in place)
 };
 

@@ -14,6 +14,7 @@
 #include "camera/sim/window_stream.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
+#include "engine/input.h"
 #include "engine/train/batch.h"
 #include "weights_tools/network_io.h"
 #include "weights_tools/weights_file.h"
@@ -85,14 +86,14 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
       // Stage 1 IoU: the current mask (binarised at 0.1) against the true mask, at the net's size.
       if (builder.source() == MaskSource::net) {
         const layers::Act& m = mask.masks();
-        const float cut = std::log(0.1f / 0.9f);
         const int d = cfg.downscale;
+        std::vector<float> keep;
         for (int t = 0; t < cfg.window; ++t) {
           const auto& truth = win.frames[std::size_t(t)].mask;
-          const float* p = m.data + std::size_t(t) * m.cb() * m.pixels() * 16;
+          input::mask_cut(m, t, 0, keep);
           for (int y = 0; y < m.h; ++y)
             for (int x = 0; x < m.w; ++x) {
-              const bool pr = p[(std::size_t(y) * m.w + x) * 16] > cut;
+              const bool pr = keep[std::size_t(y) * m.w + x] > 0;
               const bool tr = truth[std::size_t(y * d + d / 2) * win.camera.width + x * d + d / 2] != 0;
               inter += pr && tr;
               uni += pr || tr;

@@ -1,0 +1,63 @@
+#include "engine/input.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace yelan::input {
+
+void OwnedAct::resize(int n, int c, int h, int w) {
+  const layers::Act a{nullptr, n, c, h, w};
+  if (mem.size() != a.floats()) mem = layers::Floats(a.floats());
+  act = a;
+  act.data = mem.data();
+}
+
+void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
+  const int C = a.c, H = a.h, W = a.w;
+  if (vol.size() != std::size_t(C) * sensor_h * sensor_w || std::size_t(H) * d > std::size_t(sensor_h) ||
+      std::size_t(W) * d > std::size_t(sensor_w))
+    throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values does not fill " +
+                                std::to_string(C) + " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
+  const float inv = 1.f / float(d * d);
+  // Row sums first (contiguous, vectorised), then one strided store per output value into
+  // the 16-lane layout; the additions run in the plain (dy, dx) order, so the result is
+  // bit-identical to summing each cell on its own.
+  std::vector<float> row(static_cast<std::size_t>(W));
+  for (int c = 0; c < C; ++c) {
+    float* out = a.data + (std::size_t(n) * a.cb() + c / 16) * a.pixels() * 16 + c % 16;
+    const float* in = vol.data() + std::size_t(c) * sensor_h * sensor_w;
+    for (int y = 0; y < H; ++y) {
+      const float* r0 = in + std::size_t(y) * d * sensor_w;
+      if (d == 2) {
+        const float* r1 = r0 + sensor_w;
+        for (int x = 0; x < W; ++x) row[std::size_t(x)] = r0[2 * x] + r0[2 * x + 1] + r1[2 * x] + r1[2 * x + 1];
+      } else {
+        std::fill(row.begin(), row.end(), 0.f);
+        for (int dy = 0; dy < d; ++dy)
+          for (int x = 0; x < W; ++x)
+            for (int dx = 0; dx < d; ++dx) row[std::size_t(x)] += r0[std::size_t(dy) * sensor_w + x * d + dx];
+      }
+      float* o = out + std::size_t(y) * W * 16;
+      for (int x = 0; x < W; ++x) o[std::size_t(x) * 16] = row[std::size_t(x)] * inv;
+    }
+  }
+}
+
+void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep) {
+  if (channel < 0 || channel >= logits.c || n < 0 || n >= logits.n) throw std::invalid_argument("mask_cut: no such frame or channel");
+  const float cut = std::log(0.1f / 0.9f);  // sigmoid(logit) > 0.1
+  keep.resize(logits.pixels());
+  const float* p = logits.data + (std::size_t(n) * logits.cb() + channel / 16) * logits.pixels() * 16 + channel % 16;
+  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > cut ? 1.f : 0.f;
+}
+
+void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep) {
+  for (int cb = 0; cb < a.cb(); ++cb) {
+    float* p = a.data + (std::size_t(n) * a.cb() + cb) * a.pixels() * 16;
+    for (std::size_t i = 0; i < a.pixels(); ++i)
+      for (int l = 0; l < 16; ++l) p[i * 16 + l] *= keep[i];
+  }
+}
+
+}  // namespace yelan::input
