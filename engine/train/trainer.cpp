@@ -426,6 +426,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       err << "time limit reached at step " << st.step << " (checkpoint written; --resume continues)\n";
       break;
     }
+    if (spec.stop_at > 0 && st.step >= spec.stop_at && st.step < spec.steps) {
+      err << "stopped at step " << st.step << " as asked (--resume continues)\n";
+      break;
+    }
   }
   checkpoint();
   weights::save_weights((fs::path(spec.out_dir) / "final.h5").string(), weights::weights_of(cfg, mp, pp));

@@ -27,7 +27,9 @@ struct TrainSpec {
   std::vector<std::string> data, val_data;
   std::uint64_t seed = 1;
   int batch = 1;                    // windows per step
-  std::int64_t steps = 1000;
+  std::int64_t steps = 1000;        // the run's length: the LR schedule's horizon
+  std::int64_t stop_at = 0;         // > 0: stop after this step with a checkpoint, as an
+                                    // interrupted run would (--resume continues the schedule)
   int steps_per_epoch = 50;
   int val_windows = 4;
   int patience = 10;                // epochs without a better validation loss
