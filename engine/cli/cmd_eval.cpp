@@ -2,6 +2,8 @@
 // labelled recordings on disk.
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 
 #include "camera/io/event_writer.h"
 #include "camera/sim/presets.h"
@@ -9,6 +11,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/run/stream_eval.h"
 #include "engine/threads.h"
 #include "engine/train/evaluate.h"
 
@@ -16,9 +19,49 @@ namespace yelan::cli {
 
 std::vector<camera::sim::SimSpec> scenes_from(const std::string& text);  // cmd_train.cpp
 
+namespace {
+
+void write_atomically(const std::string& path, const std::string& text) {
+  const std::string tmp = camera::temp_path_for(path);
+  {
+    std::ofstream f(tmp);
+    f << text;
+    if (!f) throw std::runtime_error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+// The deployed path: `yelan run`'s pipeline on the test scenes (events in time order, TORE of
+// everything so far, stage 1 with the model's early exit, its own depth from the body-height
+// prior), each pose scored against the label at its time; root-aligned is the figure to
+// compare with eval's root-aligned one.
+int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
+  if (spec.scenes.empty()) throw UsageError("eval --run needs --sim test|PRESETS (simulated scenes with labels)");
+  std::vector<camera::sim::SimSpec> scenes = spec.scenes;
+  for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i);
+  const auto sims = run::simulate_scenes(scenes, spec.seed, spec.seconds_per_scene, std::max(0.1, spec.history_s), err);
+  run::RunOptions o;
+  if (const auto b = a.value("--beta")) o.beta = std::stod(*b);
+  const run::StreamEvalResult r = run::evaluate_stream(spec.weights, sims, o);
+  std::ostringstream t;
+  t << std::fixed << std::setprecision(1) << "deployed path (yelan run, its own depth), " << scenes.size() << " scenes, "
+    << r.poses_scored << " poses: MPJPE " << r.deployed.mpjpe_mm << " mm, root-aligned " << r.deployed.mpjpe_root_mm
+    << " mm, PCK@150 " << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1)
+    << "; with the true head depth: MPJPE " << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm
+    << " mm; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks\n";
+  out << t.str();
+  if (const auto j = a.value("--json"))
+    write_atomically(*j, "{\"deployed\": " + train::pose_scores_json(r.deployed) + ", \"paper\": " +
+                             train::pose_scores_json(r.paper) + ", \"scenes\": " + std::to_string(scenes.size()) +
+                             ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) + "}\n");
+  return kOk;
+}
+
+}  // namespace
+
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history"},
-               {"--true-mask", "--no-floors"});
+  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta"},
+               {"--true-mask", "--no-floors", "--run"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
@@ -48,17 +91,10 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
     if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
     set_threads(*n);
   }
+  if (a.flag("--run")) return eval_run(spec, a, out, err);
   const train::EvalResult r = train::evaluate(spec, err);
   out << train::eval_table(r);
-  if (const auto j = a.value("--json")) {
-    const std::string tmp = camera::temp_path_for(*j);
-    {
-      std::ofstream f(tmp);
-      f << train::eval_json(r);
-      if (!f) throw std::runtime_error("cannot write " + tmp);
-    }
-    std::filesystem::rename(tmp, *j);
-  }
+  if (const auto j = a.value("--json")) write_atomically(*j, train::eval_json(r));
   return kOk;
 }
 

@@ -75,6 +75,7 @@ const std::vector<Command>& commands() {
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
        "                  [--true-mask] [--history 5] [--no-floors] [--json OUT] [--threads T]\n"
+       "       yelan eval --run --weights W --sim test [--seed N] [--scenes M] [--seconds 1] [--beta B] [--json OUT]\n"
        "Both networks as deployed on simulated scenes: --sim test draws M scenes of the test\n"
        "split (held-out characters and motions; views, lightings and backgrounds in turn)\n"
        "with seed N, each starting anywhere in its clip after --history s of events, so anyone\n"
@@ -86,7 +87,10 @@ const std::vector<Command>& commands() {
        "floors (trivial predictors on the same frames: constant, mean_pose_at_hip,\n"
        "per_view_mean_pose_at_hip) and per view the share of frames where swapping left and\n"
        "right would be better; --json OUT writes mpjpe_mm, pck150, auc, mpjpe_root_mm,\n"
-       "frames, by_condition, floors, swap_share_by_view, ....\n",
+       "frames, by_condition, floors, swap_share_by_view, ....\n"
+       "--run scores the deployed path instead: yelan run's pipeline on the same scenes (TORE of\n"
+       "every event so far, stage 1 with early exit, depth from the body-height prior), each\n"
+       "pose against the label at its time; JSON: deployed and paper (true head depth) scores.\n",
        cmd_eval, "evaluation (issue 7)"},
       {"convert", "convert an event file between formats",
        "usage: yelan convert IN OUT [--camera N]\n"

@@ -41,6 +41,10 @@ std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count) {
   return out;
 }
 
+void place_in_clip(sim::SimSpec& s, std::uint64_t seed, std::size_t i) {
+  if (s.motion.rfind("dance", 0) != 0) s.motion_offset_s = 30 * sim::uniform01(seed, 0x0ff5e7, i);
+}
+
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   weights::LoadedNetworks nets(weights::load_weights(spec.weights), spec.weights);
   const ModelConfig& cfg = nets.cfg;
@@ -113,7 +117,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
     sim::SimSpec s = spec.scenes[i];
     sim::WindowStreamOptions so = o;
     // Anywhere in the clip, after history_s of events (a procedural dance has no clip end).
-    if (s.motion.rfind("dance", 0) != 0) s.motion_offset_s = 30 * sim::uniform01(spec.seed, 0x0ff5e7, i);
+    place_in_clip(s, spec.seed, i);
     so.warmup_s = std::max(o.warmup_s, spec.history_s);
     so.scene_s = so.warmup_s + max_windows * cfg.window / o.frame_hz + 1e-6;
     sim::SimWindowStream stream({s}, sim::hash64(spec.seed, 0xe7a1, i), so);
@@ -164,6 +168,8 @@ nlohmann::ordered_json scores_json(const PoseScores& s) {
 const char* kJointNames[kJoints] = {"head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",
                                     "handR", "handL", "kneeR", "kneeL", "footR", "footL"};
 }  // namespace
+
+std::string pose_scores_json(const PoseScores& s) { return scores_json(s).dump(); }
 
 std::string eval_json(const EvalResult& r) {
   nlohmann::ordered_json j = scores_json(r.all);

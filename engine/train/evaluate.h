@@ -44,6 +44,13 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err);
 // taking turns so every one is covered evenly.
 std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count);
 
+// Scene i of an evaluation starts anywhere in its clip (a seeded offset; procedural dances
+// have no clip end and start at 0).
+void place_in_clip(camera::sim::SimSpec& s, std::uint64_t seed, std::size_t i);
+
+// {"mpjpe_mm", "pck150", "auc", "mpjpe_root_mm", "pck150_root", "auc_root", "frames"} as JSON text.
+std::string pose_scores_json(const PoseScores& s);
+
 std::string eval_json(const EvalResult& r);
 std::string eval_table(const EvalResult& r);
 
