@@ -12,6 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <nlohmann/json.hpp>
+
 #include "camera/io/event_writer.h"
 #include "camera/sim/rng.h"
 #include "camera/sim/recording_windows.h"
@@ -189,6 +191,36 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   const std::string ckpt = (fs::path(spec.out_dir) / "checkpoint.h5").string();
   const std::string state_path = (fs::path(spec.out_dir) / "checkpoint.state").string();
   const std::string log_path = (fs::path(spec.out_dir) / "log.csv").string();
+  const std::string run_json = (fs::path(spec.out_dir) / "run.json").string();
+  // A resumed run reads the recordings it started with, even if the dataset grew since.
+  std::vector<std::string> train_files = spec.data, val_files = spec.val_data;
+  if (spec.resume && !spec.data.empty() && fs::exists(run_json)) {
+    std::ifstream in(run_json);
+    const auto j = nlohmann::json::parse(in, nullptr, false);
+    if (!j.is_discarded() && j.contains("train_files") && j["train_files"].is_array() && j.contains("val_files")) {
+      train_files = j["train_files"].get<std::vector<std::string>>();
+      val_files = j["val_files"].get<std::vector<std::string>>();
+      if (train_files.size() != spec.data.size() || val_files.size() != spec.val_data.size())
+        err << "resuming with the run's own " << train_files.size() << " training and " << val_files.size()
+            << " validation recordings (the folder now holds " << spec.data.size() << " and " << spec.val_data.size() << ")\n";
+    }
+  }
+  {
+    // What the run is, for the curves and for anyone repeating it.
+    const nlohmann::ordered_json j = {{"stage", spec.stage},           {"config", cfg.name},
+                                      {"window", cfg.window},          {"batch", spec.batch},
+                                      {"steps", spec.steps},           {"steps_per_epoch", spec.steps_per_epoch},
+                                      {"lr", spec.adam.lr},            {"lr_schedule", spec.lr_schedule},
+                                      {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
+                                      {"occlusion", spec.occlusion},   {"seed", spec.seed},
+                                      {"mask_weights", spec.mask_weights}, {"init_weights", spec.init_weights},
+                                      {"train_recordings", train_files.size()}, {"val_recordings", val_files.size()},
+                                      {"val_windows", spec.val_windows}, {"config_json", cfg.json},
+                                      {"train_files", train_files}, {"val_files", val_files}};
+    camera::TempFile tmp(run_json);
+    std::ofstream(tmp.path()) << j.dump(1) << "\n";
+    tmp.commit();
+  }
 
   MaskNet mask(cfg);
   PoseNet pose(cfg);
@@ -242,7 +274,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   }
   so.shuffle = true;
   so.counts = cfg.representation == "counts";
-  WindowSource stream(spec.scenes, spec.data, spec.seed, so);
+  WindowSource stream(spec.scenes, train_files, spec.seed, so);
   stream.seek(std::uint64_t(st.step) * std::uint64_t(spec.batch));
   std::vector<sim::SimSpec> val_scenes = spec.val_scenes.empty() ? spec.scenes : spec.val_scenes;
   const bool frozen_mask = pose_stage && !spec.mask_weights.empty();
@@ -270,7 +302,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   // net, targets), scored in eval mode at every epoch's end.
   std::vector<std::unique_ptr<BatchBuilder>> val_batches;
   auto build_validation = [&] {
-    WindowSource vs(val_scenes, spec.val_data, spec.seed ^ 0x7a11da7eull, so);
+    WindowSource vs(val_scenes, val_files, spec.seed ^ 0x7a11da7eull, so);
     constexpr int kPer = 4;
     mask.set_training(false);
     for (int i = 0; i < spec.val_windows; i += kPer) {

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The recipe of the shipped model (issue 15), rerunnable on a 2-core machine: one dataset made
+# once, the mask net and the pose net trained side by side at one thread each (never two
+# thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
+# files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
+# may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
+#   benchmarks/training/campaign.sh [dataset|train|combine|all]   (default: all)
+# Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
+# POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+Y=${Y:-build/release/yelan}
+DATA=${DATA:-/var/tmp/yelan-data/ds-s1}
+RUNS=${RUNS:-/var/tmp/yelan-data/runs}
+CFG=${CFG:-benchmarks/configs/small-pose0.125.json}
+POSE_STEPS=${POSE_STEPS:-20000}
+MASK_STEPS=${MASK_STEPS:-10000}
+what=${1:-all}
+
+dataset() {
+  "$Y" sim --dataset "$DATA" --seed 1 --train 320 --val 32 --test 0 --duration 5s --threads 2
+}
+
+# train STAGE NAME STEPS [extra flags]: resumes when NAME has a checkpoint.
+train() {
+  local stage=$1 name=$2 steps=$3
+  shift 3
+  local resume=()
+  [ -f "$RUNS/$name/checkpoint.state" ] && resume=(--resume)
+  "$Y" train --stage "$stage" --config "$CFG" --data "$DATA" -o "$RUNS/$name" --steps "$steps" --batch 8 \
+    --epoch-steps 250 --val-windows 48 --checkpoint-minutes 5 --threads 1 --quiet "${resume[@]}" "$@" \
+    > "$RUNS/$name.out" 2>&1
+}
+
+mkdir -p "$RUNS"
+case "$what" in
+  dataset) dataset ;;
+  train)
+    train mask mask-p0125 "$MASK_STEPS" &
+    train pose pose-p0125 "$POSE_STEPS" --occlusion &
+    wait ;;
+  combine)
+    "$Y" weights combine --mask "$RUNS/mask-p0125/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
+      -o models/default.h5 ;;
+  all)
+    dataset
+    "$0" train
+    "$0" combine ;;
+  *) echo "usage: $0 [dataset|train|combine|all]" >&2; exit 2 ;;
+esac
