@@ -4,7 +4,7 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|train|combine|all]   (default: all)
+#   benchmarks/training/campaign.sh [dataset|train|train-mask|train-pose|combine|all]   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
 set -euo pipefail
@@ -14,7 +14,7 @@ DATA=${DATA:-/var/tmp/yelan-data/ds-s1}
 RUNS=${RUNS:-/var/tmp/yelan-data/runs}
 CFG=${CFG:-benchmarks/configs/small-pose0.125.json}
 POSE_STEPS=${POSE_STEPS:-20000}
-MASK_STEPS=${MASK_STEPS:-10000}
+MASK_STEPS=${MASK_STEPS:-4000}
 what=${1:-all}
 
 dataset() {
@@ -36,9 +36,11 @@ mkdir -p "$RUNS"
 case "$what" in
   dataset) dataset ;;
   train)
-    train mask mask-p0125 "$MASK_STEPS" &
-    train pose pose-p0125 "$POSE_STEPS" --occlusion &
+    "$0" train-mask &
+    "$0" train-pose &
     wait ;;
+  train-mask) train mask mask-p0125 "$MASK_STEPS" ;;
+  train-pose) train pose pose-p0125 "$POSE_STEPS" --occlusion ;;
   combine)
     "$Y" weights combine --mask "$RUNS/mask-p0125/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;
@@ -46,5 +48,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|train|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|train|train-mask|train-pose|combine|all]" >&2; exit 2 ;;
 esac
