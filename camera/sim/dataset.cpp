@@ -1,6 +1,9 @@
 #include "camera/sim/dataset.h"
 
 #include <omp.h>
+#include <signal.h>
+
+#include <cerrno>
 
 #include <atomic>
 #include <chrono>
@@ -131,6 +134,19 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
       Job j{split, dataset_member(split, i, d.seed, d.duration_s), ""};
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
+    }
+  }
+  // Temporary files of a run that was killed (name.tmp-PID, its process gone) are removed:
+  // their recordings are simulated again.
+  for (const char* split : {"train", "val", "test"}) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(fs::path(d.out_dir) / split, ec)) {
+      const std::string n = e.path().filename().string();
+      const auto at = n.rfind(".tmp-");
+      if (at == std::string::npos) continue;
+      const std::string pid = n.substr(at + 5);
+      if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos || pid.size() > 9) continue;
+      if (::kill(pid_t(std::stol(pid)), 0) != 0 && errno == ESRCH) fs::remove(e.path(), ec);
     }
   }
   std::vector<std::size_t> todo;

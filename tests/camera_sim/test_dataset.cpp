@@ -2,7 +2,12 @@
 // and no stretch of a training clip; augmentation is drawn per recording and varies.
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <set>
+#include <sstream>
 
 #include "camera/sim/characters.h"
 #include "camera/sim/dataset.h"
@@ -68,4 +73,38 @@ TEST_CASE("dataset: a clip segment and a start offset play inside the segment, b
   CHECK((c.joints_mm[7] - e.joints_mm[7]).norm() < 1e-6);
   s.motion_begin = 0.7, s.motion_end = 0.6;
   CHECK_THROWS(Simulator(s));
+}
+
+TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's temp files removed), with a manifest", "[sim]") {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("yelan-dataset-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  DatasetSpec d;
+  d.out_dir = dir.string();
+  d.seed = 2;
+  d.train = 2, d.val = 1, d.test = 1;
+  d.duration_s = 0.5;
+  d.threads = 2;
+  std::ostringstream log;
+  CHECK(make_dataset(d, log) == 4);
+  const std::string first = dataset_file_name(dataset_member("train", 0, 2, 0.5));
+  const auto path = dir / "train" / first;
+  REQUIRE(std::filesystem::exists(path));
+  CHECK(std::filesystem::exists(dir / "val" / dataset_file_name(dataset_member("val", 0, 2, 0.5))));
+  CHECK(std::filesystem::exists(dir / "test" / dataset_file_name(dataset_member("test", 0, 2, 0.5))));
+  const auto size = std::filesystem::file_size(path);
+  // A killed run's leftovers (pid 999999999 is no process) go; done files stay.
+  std::ofstream(dir / "train" / (first + ".tmp-999999999")) << "partial";
+  std::filesystem::remove(dir / "val" / dataset_file_name(dataset_member("val", 0, 2, 0.5)));
+  CHECK(make_dataset(d, log) == 1);
+  CHECK_FALSE(std::filesystem::exists(dir / "train" / (first + ".tmp-999999999")));
+  CHECK(std::filesystem::file_size(path) == size);
+  std::ifstream m(dir / "manifest.json");
+  std::stringstream text;
+  text << m.rdbuf();
+  CHECK(text.str().find("\"yelan-dataset-manifest\"") != std::string::npos);
+  CHECK(text.str().find(first) != std::string::npos);
+  d.duration_s = 0;
+  CHECK_THROWS_AS(make_dataset(d, log), std::invalid_argument);
+  std::filesystem::remove_all(dir);
 }
