@@ -1,6 +1,7 @@
 // What the benchmark harnesses share: the --threads-list option and the way they reach
 // the PyTorch reference scripts.
 #pragma once
+#include <fstream>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -12,6 +13,17 @@
 namespace yelan::bench {
 
 // --threads-list "1,2" as thread counts; a bad entry is a usage error.
+// The CPU's model name (/proc/cpuinfo), or "unknown CPU": every speed figure names its CPU.
+inline std::string cpu_name() {
+  std::ifstream in("/proc/cpuinfo");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("model name", 0) == 0 && line.find(':') != std::string::npos) {
+      const auto a = line.find_first_not_of(" \t", line.find(':') + 1);
+      return a == std::string::npos ? "unknown CPU" : line.substr(a);
+    }
+  return "unknown CPU";
+}
+
 inline std::vector<int> threads_list(const cli::Args& args, const std::string& fallback = "1,2") {
   std::vector<int> out;
   for (const auto& t : cli::split_list(args.value_or("--threads-list", fallback))) {

@@ -23,7 +23,9 @@
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
 #include "engine/subprocess.h"
+#include "camera/sim/recording_windows.h"
 #include "engine/train/batch.h"
+#include "engine/train/trainer.h"
 #include "weights_tools/network_io.h"
 #include "weights_tools/weights_file.h"
 
@@ -330,10 +332,74 @@ void print_table(const std::string& config, const std::vector<Row>& rows, std::o
   }
 }
 
+// The whole trainer, data included: `steps` steps of the pose stage at one thread reading
+// the dataset on disk (the default: batch 8, 5 s of TORE history), against the issue-7
+// path (windows simulated afresh, batch 1) on the same config, in the same run.
+int pipeline_bench(const ModelConfig& cfg, const std::string& dir, int steps, bool json, std::ostream& out, std::ostream& err) {
+  struct Side {
+    std::string name;
+    train::TrainResult r;
+  };
+  std::vector<Side> sides;
+  ScratchDir scratch;
+  scratch.p = fs::temp_directory_path() / ("yelan-bench-pipeline-" + std::to_string(::getpid()));
+  fs::create_directories(scratch.p);
+  const int saved = yelan::threads();
+  set_threads(1);
+  for (const bool disk : {true, false}) {
+    train::TrainSpec t;
+    t.stage = "pose";
+    t.cfg = cfg;
+    if (disk) {
+      const bool dataset = fs::is_directory(fs::path(dir) / "train") && fs::is_directory(fs::path(dir) / "val");
+      if (dataset) {
+        t.data = camera::sim::list_recordings((fs::path(dir) / "train").string());
+        t.val_data = camera::sim::list_recordings((fs::path(dir) / "val").string());
+      } else {
+        camera::sim::split_by_recording(camera::sim::list_recordings(dir), t.data, t.val_data);
+      }
+      t.batch = 8;
+    } else {
+      t.scenes = scenes_of("train");
+      t.batch = 1;
+    }
+    t.steps = disk ? steps : std::max(2, steps / 2);
+    t.steps_per_epoch = 1 << 30;  // one validation, at the end, of one window
+    t.val_windows = 1;
+    t.warmup_steps = 0;
+    t.checkpoint_minutes = 1e6;
+    t.out_dir = (scratch.p / (disk ? "disk" : "sim")).string();
+    err << (disk ? "training from " + dir : std::string("training from the simulator stream")) << ": " << t.steps
+        << " steps of " << t.batch << " x " << cfg.window << " frames at one thread\n";
+    std::ostringstream quiet;
+    sides.push_back({disk ? "disk dataset, batch 8, 5 s history" : "simulator stream, batch 1 (issue 7)", train::train(t, quiet)});
+  }
+  set_threads(saved);
+  const auto sps = [](const train::TrainResult& r) { return r.frames / std::max(r.step_s, 1e-9); };
+  const auto per_cpu = [](const train::TrainResult& r) { return r.frames / std::max(r.cpu_s, 1e-9); };
+  const double ratio = per_cpu(sides[0].r) / per_cpu(sides[1].r);
+  if (json) {
+    out << "{\"config\": \"" << cfg.name << "\", \"cpu\": \"" << cpu_name() << "\", \"rows\": [";
+    for (std::size_t i = 0; i < sides.size(); ++i)
+      out << (i ? ", " : "") << "{\"data\": \"" << sides[i].name << "\", \"samples_per_s\": " << sps(sides[i].r)
+          << ", \"samples_per_cpu_s\": " << per_cpu(sides[i].r) << ", \"data_share\": "
+          << sides[i].r.data_s / std::max(sides[i].r.step_s, 1e-9) << ", \"frames\": " << sides[i].r.frames << "}";
+    out << "], \"ratio_per_cpu_s\": " << ratio << "}\n";
+    return 0;
+  }
+  out << "training data pipeline, " << cfg.name << ", one thread, " << cpu_name() << "\n";
+  for (const Side& s : sides)
+    out << std::fixed << std::setprecision(1) << "  " << std::left << std::setw(40) << s.name << std::right << std::setw(8)
+        << sps(s.r) << " samples/s  " << std::setw(8) << per_cpu(s.r) << " per CPU-s  data " << std::setprecision(0)
+        << 100 * s.r.data_s / std::max(s.r.step_s, 1e-9) << "% of step time\n";
+  out << std::setprecision(2) << "  disk / simulator, samples per CPU-second: " << ratio << "x\n";
+  return 0;
+}
+
 }  // namespace
 
 int run_train_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench train", argv, {"--config", "--stage", "--batch", "--batches", "--steps", "--threads-list", "--sim", "--keep-data"},
+  cli::Args args("bench train", argv, {"--config", "--stage", "--batch", "--batches", "--steps", "--threads-list", "--sim", "--keep-data", "--data"},
                  {"--json", "--no-torch"});
   args.expect_positionals(0, 0);
   const std::string config = args.value_or("--config", "small");
@@ -342,6 +408,13 @@ int run_train_bench(const std::vector<std::string>& argv, std::ostream& out, std
     cfg = load_model_config(config);
   } catch (const ConfigError& e) {
     throw cli::UsageError(e.what());
+  }
+  if (const auto dir = args.value("--data")) {
+    try {
+      return pipeline_bench(cfg, *dir, args.int_value_or("--steps", 20, 2, 1 << 20), args.flag("--json"), out, err);
+    } catch (const std::runtime_error& e) {
+      throw cli::UsageError(std::string("--data: ") + e.what());
+    }
   }
   const std::string which = args.value_or("--stage", "both");
   if (which != "pose" && which != "mask" && which != "both") throw cli::UsageError("--stage must be pose, mask or both");

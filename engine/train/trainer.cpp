@@ -364,8 +364,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
 
   mask.set_training(!pose_stage);  // the frozen mask net runs with its running statistics
   pose.set_training(pose_stage);
-  TrainResult result;
   double loss = 0, grad_norm = 0;
+  TrainResult result;
   if (st.bad_epochs >= spec.patience) {
     result.early_stopped = true;
     err << "this run had already stopped early (no better validation loss for " << spec.patience << " epochs)\n";
@@ -381,7 +381,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       sim::Rng occ(spec.seed, 0x0cc1u + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       builder.add(w, mask, spec.occlusion ? &occ : nullptr);
     }
-    data_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double built = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    data_s += built;
+    result.data_s += built;
     const Batch& batch = builder.batch();
     adam.zero_grad();
     if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
@@ -407,6 +409,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     ++st.step;
     const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     step_s += dt;
+    result.step_s += dt;
+    result.frames += std::int64_t(spec.batch) * cfg.window;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double sps = spec.batch * cfg.window / dt;
     double val = -1, val_mm = -1;
@@ -467,6 +471,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   weights::save_weights((fs::path(spec.out_dir) / "final.h5").string(), weights::weights_of(cfg, mp, pp));
   if (spec.progress_tty) err << "\n";
   result.steps = st.step;
+  result.cpu_s = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
   result.last_loss = loss;
   result.best_val = st.best_val;
   return result;

@@ -60,6 +60,10 @@ struct TrainResult {
   std::int64_t steps = 0;
   double last_loss = 0, best_val = 0;
   bool early_stopped = false;
+  // This run's part (not resumed ones): training steps' wall time, the share of it spent
+  // building batches (reading or simulating windows), CPU seconds, frames trained on.
+  double step_s = 0, data_s = 0, cpu_s = 0;
+  std::int64_t frames = 0;
 };
 
 // Writes out_dir/{log.csv, checkpoint.h5, checkpoint.state, best.h5, final.h5}.
