@@ -103,11 +103,38 @@ SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, doub
   return s;
 }
 
+SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s) {
+  dataset_characters(split);  // checks the split's name
+  Rng r(hash64(seed, split_stream(split) ^ 0xe3e3, std::uint64_t(i)), 0xe3e7);
+  SimSpec s;
+  s.dancer = false;
+  s.motion = "dance";  // moves nothing visible; keeps the sampling rate of a scene with motion
+  const View views[4] = {View::front, View::back, View::left, View::right};
+  s.scene.view = views[r.below(4)];
+  s.scene.yaw_deg = view_yaw_deg(s.scene.view) + r.uniform(-45, 45);
+  s.scene.distance_mm = r.uniform(2500, 5000);
+  s.scene.height_mm = r.uniform(800, 1800);
+  const double l = r.uniform();
+  s.scene.light = l < 0.34 ? LightLevel::high : l < 0.67 ? LightLevel::medium : LightLevel::low;
+  s.scene.background = r.uniform() < 0.7 ? SceneConfig::dynamic : SceneConfig::static_wall;
+  s.scene.flicker = r.uniform() < 0.5;
+  s.scene.occluders = r.uniform() < 0.3;
+  s.duration_s = duration_s;
+  s.seed = r.bits() & 0xffffffffffffull;
+  std::ostringstream name;
+  name << split << "-empty-" << std::setw(5) << std::setfill('0') << i << "-" << view_name(s.scene.view) << "-"
+       << light_name(s.scene.light) << "-" << (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static")
+       << (s.scene.occluders ? "-occluded" : "") << (s.scene.flicker ? "-flicker" : "");
+  s.name = name.str();
+  return s;
+}
+
 std::string dataset_file_name(const SimSpec& spec) { return spec.name + ".yelan.h5"; }
 
 int make_dataset(const DatasetSpec& d, std::ostream& err) {
   if (d.out_dir.empty()) throw std::invalid_argument("dataset: no output folder");
-  if (d.train < 0 || d.val < 0 || d.test < 0 || d.train + d.val + d.test == 0)
+  if (d.train < 0 || d.val < 0 || d.test < 0 || d.train_empty < 0 || d.val_empty < 0 || d.test_empty < 0 ||
+      d.train + d.val + d.test + d.train_empty + d.val_empty + d.test_empty == 0)
     throw std::invalid_argument("dataset: need a non-negative count per split, and at least one recording");
   if (!(d.duration_s >= 0.5 && d.duration_s <= 600)) throw std::invalid_argument("dataset: duration must be 0.5-600 s");
   struct Job {
@@ -121,6 +148,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"seed", d.seed},
                                      {"duration_s", d.duration_s},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
+                                     {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"characters",
                                       {{"train", dataset_characters("train")},
                                        {"val", dataset_characters("val")},
@@ -132,6 +160,12 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     fs::create_directories(fs::path(d.out_dir) / split);
     for (int i = 0; i < n; ++i) {
       Job j{split, dataset_member(split, i, d.seed, d.duration_s), ""};
+      j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
+      jobs.push_back(j);
+    }
+    const int empty = split == "train" ? d.train_empty : split == "val" ? d.val_empty : d.test_empty;
+    for (int i = 0; i < empty; ++i) {
+      Job j{split, dataset_empty_member(split, i, d.seed, d.duration_s), ""};
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

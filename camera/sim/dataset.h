@@ -5,7 +5,8 @@
 //   train: the training characters but two, the first 85% of each training clip, dances;
 //   val:   the two held-out training characters, the last 15% of each training clip,
 //          dances of other styles;
-//   test:  the test characters and clips (../shared/data/mocap/README.md), dances.
+//   test:  the test characters and clips (../shared/data/mocap/README.md), dances;
+// and, per split, scenes with nobody in them (stage 1's negatives).
 // Member i of a split is a pure function of (seed, split, i): the same command makes the
 // same bytes, done files are kept, so an interrupted run resumes where it stopped.
 #pragma once
@@ -22,6 +23,10 @@ struct DatasetSpec {
   std::string out_dir;        // out_dir/{train,val,test}/*.yelan.h5 and out_dir/manifest.json
   std::uint64_t seed = 1;
   int train = 400, val = 40, test = 60;
+  // Scenes with nobody in them per split (named <split>-empty-NNNNN-...): rooms, moving
+  // backgrounds, flickering lamps, occluders and sensor noise at every lighting, drawn from
+  // their own seed stream (adding them never changes the dancer members).
+  int train_empty = 0, val_empty = 0, test_empty = 0;
   double duration_s = 5;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
@@ -32,6 +37,7 @@ const std::vector<std::string>& dataset_characters(const std::string& split);
 
 // Member i of a split: the scene, motion and augmentation, and its file name.
 SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
+SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
 std::string dataset_file_name(const SimSpec& spec);
 
 // Simulates what is missing, in parallel, and writes the manifest (every member's scene as

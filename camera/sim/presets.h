@@ -1,7 +1,8 @@
 // Named simulations. A preset name is `<character>-<motion>-<view>-<light>-<bg>` (a member of
 // the paper's grid, e.g. `ana-05_04-front-high-static`) or its short form
 // `<view>-<light>-<bg>` (default character and motion, e.g. `front-low-dynamic`); either may
-// end in `-occluded` (static and moving occluders) and/or `-flicker` (mains flicker).
+// end in `-occluded` (static and moving occluders), `-flicker` (mains flicker) and/or
+// `-empty` (nobody there: the scene alone, for stage 1's negatives).
 // motion: a CMU clip stem (05_04, ...), `dance` (style from the seed) or `dance<N>`.
 // view: front|back|left|right; light: high|medium|low; bg: static|dynamic.
 // A scene.json gives the same fields by name, plus camera, pixel and timing settings.

@@ -104,6 +104,7 @@ RecordingWriter::RecordingWriter(const std::string& path, const Simulator& sim) 
   h5::write_attr_string(f, "lighting", light_name(spec.scene.light));
   h5::write_attr_string(f, "background", spec.scene.background == SceneConfig::dynamic ? "dynamic" : "static");
   h5::write_attr_i64(f, "seed", std::int64_t(spec.seed));
+  h5::write_attr_i64(f, "dancer", spec.dancer ? 1 : 0);
   Impl& m = *impl_;
   m.labels = h5::create_group(f, "labels");
   m.masks = h5::create_group(f, "masks");

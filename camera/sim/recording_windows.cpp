@@ -71,6 +71,7 @@ RecordingInfo read_info(hid_t f, const std::string& path) {
     r.view = h5::read_attr_string(f, "view").value_or("");
     r.lighting = h5::read_attr_string(f, "lighting").value_or("");
     r.background = h5::read_attr_string(f, "background").value_or("");
+    if (const auto dancer = h5::read_attr_i64(f, "dancer")) r.dancer = *dancer != 0;
     if (const auto scene = h5::read_attr_string(f, "scene")) {
       const auto j = nlohmann::json::parse(*scene, nullptr, false);
       if (!j.is_discarded() && j.contains("occluders") && j["occluders"].is_boolean()) r.occluded = j["occluders"].get<bool>();

@@ -18,6 +18,7 @@ struct RecordingInfo {
   CameraModel camera;
   std::string character, motion, view, lighting, background;
   bool occluded = false;
+  bool dancer = true;               // false: an empty scene (attribute dancer = 0)
   std::int64_t first_event_us = 0;
   std::vector<std::int64_t> label_t;
   std::vector<float> joints;        // label_t.size() x 13 x 3, mm, camera frame

@@ -126,7 +126,7 @@ void Simulator::sample(double t_s) {
   const BodyPose& pose = pose_;
   dresser_.update(pose, t_s);
   prims_.clear();
-  dresser_.primitives(prims_);
+  if (spec_.dancer) dresser_.primitives(prims_);
   const auto t0 = std::chrono::steady_clock::now();
   scene_.render(t_s, prims_, frame_);
   stats_.render_wall_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -146,7 +146,7 @@ Label Simulator::label_at(double t_s) const {
       const double u = cam.fx * c.x() / c.z() + cam.cx, v = cam.fy * c.y() / c.z() + cam.cy;
       ok = u >= 0 && u < cam.width && v >= 0 && v < cam.height;
     }
-    l.valid[j] = ok;
+    l.valid[j] = ok && spec_.dancer;
   }
   return l;
 }
@@ -240,6 +240,7 @@ std::string Simulator::description_json() const {
       {"clothing", clothing_name(character_.clothing)},
       {"height_mm", character_.shape.height_mm},
       {"test_only_character", character_.test_only},
+      {"dancer", spec_.dancer},
       {"motion", spec_.motion},
       {"speed", spec_.motion_options.speed},
       {"mirror", spec_.motion_options.mirror},

@@ -36,6 +36,9 @@ struct SimSpec {
   // Body and clothes varied around the named character (datasets draw them per recording).
   double height_scale = 1, girth_scale = 1;
   std::optional<Clothing> clothing;
+  // false: nobody in the scene (the room, its moving background, lights and noise alone);
+  // labels are all invalid and masks empty. Negative data for stage 1's "nobody there".
+  bool dancer = true;
   bool dance_static_legs = false;   // procedural only: upper body moves, legs stay put
   SceneConfig scene;
   PixelParams pixel = pixel_params_davis346();

@@ -191,13 +191,17 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   d.train = a.int_value_or("--train", d.train, 0, 1 << 20);
   d.val = a.int_value_or("--val", d.val, 0, 1 << 20);
   d.test = a.int_value_or("--test", d.test, 0, 1 << 20);
+  d.train_empty = a.int_value_or("--train-empty", 0, 0, 1 << 20);
+  d.val_empty = a.int_value_or("--val-empty", 0, 0, 1 << 20);
+  d.test_empty = a.int_value_or("--test-empty", 0, 0, 1 << 20);
   d.duration_s = parse_duration(a.value_or("--duration", "5s"));
   d.threads = a.int_value_or("--threads", 0, 0, 256);
   d.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   try {
     const auto t0 = std::chrono::steady_clock::now();
     const int made = sim::make_dataset(d, err);
-    out << dir << ": " << d.train << " train, " << d.val << " val, " << d.test << " test recordings (" << made
+    out << dir << ": " << d.train << " train, " << d.val << " val, " << d.test << " test recordings and "
+        << d.train_empty + d.val_empty + d.test_empty << " without a dancer (" << made
         << " simulated now in " << std::llround(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count())
         << " s), manifest " << (std::filesystem::path(dir) / "manifest.json").string() << "\n";
   } catch (const std::invalid_argument& e) {
@@ -230,7 +234,7 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
   const Args a("sim", argv,
                {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
                 "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes",
-                "--dataset", "--train", "--val", "--test"},
+                "--dataset", "--train", "--val", "--test", "--train-empty", "--val-empty", "--test-empty"},
                {"--list", "--quiet", "--force"});
   a.expect_positionals(0, 0);
   if (a.value("--threads")) omp_set_num_threads(a.int_value_or("--threads", 1, 1, 256));

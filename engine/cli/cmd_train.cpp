@@ -92,6 +92,19 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
     } catch (const std::runtime_error& e) {
       throw UsageError(std::string("--data: ") + e.what());
     }
+    if (spec.stage == "pose") {
+      // Scenes with nobody in them teach stage 1 "nobody there"; stage 2 has no pose to learn.
+      std::size_t dropped = 0;
+      for (auto* list : {&spec.data, &spec.val_data}) {
+        std::vector<std::string> kept;
+        for (const auto& f : *list)
+          if (camera::sim::read_recording_info(f).dancer) kept.push_back(f);
+        dropped += list->size() - kept.size();
+        *list = kept;
+      }
+      if (dropped) err << dropped << " recordings without a dancer left out (stage 1's negatives)\n";
+      if (spec.data.empty() || spec.val_data.empty()) throw UsageError("--data: no recordings with a dancer to train or validate on");
+    }
     err << spec.data.size() << " recordings for training, " << spec.val_data.size() << " for validation ("
         << (a.value("--val-data") ? "--val-data" : spec.val_data.size() && spec.val_data[0].find("/val/") != std::string::npos ? "the dataset's val split" : "every tenth by name, split by recording") << ")\n";
   }

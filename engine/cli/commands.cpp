@@ -34,6 +34,7 @@ const std::vector<Command>& commands() {
        "       yelan sim --grid train|test|all --out-dir DIR [--duration 2s] [--seed N] [--limit N]\n"
        "                 [--characters a,b] [--motions m,..] [--views v,..] [--lights l,..] [--backgrounds b,..] [--force]\n"
        "       yelan sim --dataset DIR [--seed N] [--train 400] [--val 40] [--test 60] [--duration 5s] [--threads T]\n"
+       "                 [--train-empty N] [--val-empty N] [--test-empty N]\n"
        "       yelan sim --list\n"
        "A character performs a CMU clip or a procedural dance in a scene; a ray caster renders\n"
        "it at an adaptive rate (>= 1 kHz) and a v2e-style pixel model makes the events. OUT holds\n"
@@ -46,7 +47,9 @@ const std::vector<Command>& commands() {
        "augmentation drawn per recording (mirror, speed 0.7-1.4x, start anywhere, yaw +-25 deg,\n"
        "distance, height, body and clothes, lighting, background, flicker, occluders); val holds\n"
        "out two training characters and the last 15% of each training clip, test uses the test\n"
-       "characters and clips. Parallel over --threads (default: all cores); resumable (done\n"
+       "characters and clips; --*-empty add scenes with nobody in them (rooms, moving backgrounds,\n"
+       "flicker, occluders, noise: stage 1's negatives). Parallel over --threads (default: all\n"
+       "cores); resumable (done\n"
        "files are kept); the same seed gives the same files.\n",
        cmd_sim, "the motion-to-event simulator (issue 6)"},
       {"train", "train the mask or pose network on CPU",

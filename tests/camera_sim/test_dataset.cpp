@@ -7,11 +7,13 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <span>
 #include <sstream>
 
 #include "camera/sim/characters.h"
 #include "camera/sim/dataset.h"
 #include "camera/sim/presets.h"
+#include "camera/sim/simulator.h"
 
 using namespace yelan::camera::sim;
 
@@ -107,4 +109,31 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   d.duration_s = 0;
   CHECK_THROWS_AS(make_dataset(d, log), std::invalid_argument);
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("dataset: empty scenes have events from the room alone, no valid joint, empty masks", "[sim]") {
+  struct Tally : SimSink {
+    std::uint64_t n_events = 0, valid = 0, human = 0;
+    void events(std::span<const yelan::camera::Event> ev) override { n_events += ev.size(); }
+    void label(const Label& l) override {
+      for (auto v : l.valid) valid += v;
+    }
+    void mask(std::int64_t, const RenderedFrame& f) override {
+      for (auto m : f.mask) human += m != 0;
+    }
+  };
+  SimSpec s = preset_spec("ben-05_04-front-medium-dynamic-flicker-empty");
+  CHECK_FALSE(s.dancer);
+  CHECK(s.scene.flicker);
+  s.duration_s = 0.3;
+  Simulator sim(s);
+  Tally t;
+  sim.run_until(s.duration_s, t);
+  CHECK(t.n_events > 1000);  // flicker and the moving background still make events
+  CHECK(t.valid == 0);
+  CHECK(t.human == 0);
+  const SimSpec e = dataset_empty_member("train", 3, 1, 5.0);
+  CHECK_FALSE(e.dancer);
+  CHECK(e.name.rfind("train-empty-00003-", 0) == 0);
+  CHECK(dataset_member("train", 3, 1, 5.0).dancer);  // the dancer members are unchanged
 }
