@@ -102,3 +102,51 @@ TEST_CASE("Args parses values, flags and positionals and rejects the rest", "[cl
   CHECK_THROWS_WITH(Args("x", {"--rate", "abc"}, {"--rate"}, {}).int_value_or("--rate", 0, 1, 9),
                     Catch::Contains("'abc'"));
 }
+
+TEST_CASE("Args::number_or takes finite numbers in range only, naming the option and the range", "[cli]") {
+  auto num = [](const std::string& v, double lo, double hi, bool open = false) {
+    return Args("x", {"--v", v}, {"--v"}, {}).number_or("--v", -7, lo, hi, open);
+  };
+  CHECK(num("0.5", 0, 1) == 0.5);
+  CHECK(num("1e-3", 0, 1, true) == 1e-3);
+  CHECK(Args("x", {}, {"--v"}, {}).number_or("--v", -7, 0, 1) == -7);  // absent: the fallback
+  for (const char* bad : {"nan", "inf", "-inf", "1e30", "-1", "2", "abc", "", "0.5x"})
+    CHECK_THROWS_WITH(num(bad, 0, 1), Catch::Contains("--v expects a number in [0, 1]"));
+  CHECK_THROWS_WITH(num("0", 0, 1, true), Catch::Contains("(0, 1]"));
+  CHECK(Args("x", {"--s", "281474976710655"}, {"--s"}, {}).u64_value_or("--s", 1, (1ull << 48) - 1) == (1ull << 48) - 1);
+  CHECK_THROWS_WITH(Args("x", {"--s", "99999999999999999999999"}, {"--s"}, {}).u64_value_or("--s", 1, 1000),
+                    Catch::Contains("--s expects an integer in [0, 1000]"));
+}
+
+TEST_CASE("numbers out of range are refused with exit 2 before any work, naming the flag", "[cli]") {
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
+  const std::vector<std::pair<std::vector<std::string>, std::string>> cases = {
+      {{"run", "--weights", M, D, "--height-mm", "nan"}, "--height-mm"},
+      {{"run", "--weights", M, D, "--height-mm", "0"}, "--height-mm"},
+      {{"run", "--weights", M, D, "--height-mm", "1e30"}, "--height-mm"},
+      {{"run", "--weights", M, D, "--depth-mm", "0"}, "--depth-mm"},
+      {{"run", "--weights", M, D, "--depth-mm", "-100"}, "--depth-mm"},
+      {{"run", "--weights", M, D, "--beta", "nan"}, "--beta"},
+      {{"run", "--weights", M, D, "--beta", "2"}, "--beta"},
+      {{"run", "--weights", M, D, "--beta", "-1"}, "--beta"},
+      {{"run", "--weights", M, D, "--rate", "inf"}, "--rate"},
+      {{"eval", "--weights", M, "--sim", "test", "--seconds", "0"}, "--seconds"},
+      {{"eval", "--weights", M, "--sim", "test", "--seconds", "nan"}, "--seconds"},
+      {{"train", "--stage", "pose", "--config", "micro", "--sim", "train", "-o", "/tmp/x", "--lr", "-1"}, "--lr"},
+      {{"train", "--stage", "pose", "--config", "micro", "--sim", "train", "-o", "/tmp/x", "--lr", "abc"}, "--lr"},
+      {{"train", "--stage", "pose", "--config", "micro", "--sim", "train", "-o", "/tmp/x", "--max-minutes", "0"},
+       "--max-minutes"},
+      {{"train", "--stage", "pose", "--config", "micro", "--sim", "train", "-o", "/tmp/x", "--checkpoint-minutes", "0"},
+       "--checkpoint-minutes"},
+      {{"sim", "--preset", "front-high-static", "-o", "/tmp/x.yelan.h5", "--seed", "99999999999999999999999"}, "--seed"},
+  };
+  for (const auto& [argv, flag] : cases) {
+    INFO(argv[0] << " " << argv[argv.size() - 2] << " " << argv.back());
+    const Result r = cli(argv);
+    CHECK(r.code == 2);
+    CHECK(has(r.err, flag));
+    CHECK_FALSE(has(r.err, "stod"));
+    CHECK_FALSE(has(r.err, "stoull"));
+  }
+}

@@ -47,8 +47,8 @@ std::string random_weights(const std::string& config, const std::string& dir) {
 int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights", "--crop-margin"}, {"--json", "--no-torch"});
   args.expect_positionals(0, 0);
-  const double rate = std::stod(args.value_or("--rate", "50")), seconds = std::stod(args.value_or("--seconds", "2"));
-  const double beta = std::stod(args.value_or("--beta", "0.99"));
+  const double rate = args.number_or("--rate", 50, 0, 10000, true), seconds = args.number_or("--seconds", 2, 0, 3600, true);
+  const double beta = args.number_or("--beta", 0.99, 0, 2);
   const int crop_margin = args.value("--crop-margin") ? args.int_value_or("--crop-margin", 0, 0, 4096) : -1;
   const std::vector<int> threads = threads_list(args);
   // The events: a dancer simulated in memory.

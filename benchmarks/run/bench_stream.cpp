@@ -1,5 +1,8 @@
 #include "benchmarks/run/bench_stream.h"
 
+#include <charconv>
+#include <cmath>
+
 #include <cstdio>
 #include <sstream>
 
@@ -27,10 +30,16 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
   const auto w = a.value("--weights");
   if (!w) throw cli::UsageError(std::string(what.command) + " needs --weights W");
   std::vector<double> values;
-  for (const auto& v : cli::split_list(a.value_or("--values", what.defaults))) values.push_back(std::stod(v));
+  for (const auto& v : cli::split_list(a.value_or("--values", what.defaults))) {
+    double d = 0;
+    const auto [ptr, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
+    if (ec != std::errc() || ptr != v.data() + v.size() || !std::isfinite(d) || d < 0 || d > 1e6)
+      throw cli::UsageError("--values: '" + v + "' is not a number in [0, 1e6]");
+    values.push_back(d);
+  }
   const int scenes = a.int_value_or("--scenes", 12, 1, 1 << 20);
   const std::uint64_t seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
-  const double seconds = std::stod(a.value_or("--seconds", "1"));
+  const double seconds = a.number_or("--seconds", 1, 0, 3600, true);
   set_threads(a.int_value_or("--threads", 1, 1, 1024));
   std::vector<camera::sim::SimSpec> specs;
   for (const auto& n : train::draw_test_scenes(seed, scenes)) specs.push_back(camera::sim::preset_spec(n));
@@ -43,8 +52,8 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
   std::vector<Row> rows;
   for (double v : values) {
     run::RunOptions o;
-    o.rate_hz = std::stod(a.value_or("--rate", "50"));
-    o.beta = std::stod(a.value_or("--beta", "0.99"));
+    o.rate_hz = a.number_or("--rate", 50, 0, 10000, true);
+    o.beta = a.number_or("--beta", 0.99, 0, 2);
     const std::string name = what.name;
     if (name == "crop_margin") o.crop_margin = int(v);
     else (name == "beta" ? o.beta : o.rate_hz) = v;

@@ -51,7 +51,7 @@ double real_event_rate(std::string& what) {
 int run_sim_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   cli::Args args("bench sim", argv, {"--duration", "--threads-list", "--character", "--motion", "--view"}, {"--json"});
   args.expect_positionals(0, 0);
-  const double duration = std::stod(args.value_or("--duration", "2"));
+  const double duration = args.number_or("--duration", 2, 0, 3600, true);
   if (!(duration > 0 && duration < 3600)) throw cli::UsageError("--duration: seconds in (0, 3600)");
   const std::vector<int> threads = threads_list(args);
   const std::string character = args.value_or("--character", "ben"), view = args.value_or("--view", "front");

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <sstream>
 
 namespace yelan::cli {
 
@@ -61,6 +63,37 @@ int Args::int_value_or(const std::string& name, int fallback, int min, int max) 
   if (v->empty() || ec != std::errc() || ptr != v->data() + v->size() || n < min || n > max)
     throw UsageError("option " + name + " expects an integer in [" + std::to_string(min) + ", " +
                      std::to_string(max) + "], got '" + *v + "'");
+  return n;
+}
+
+namespace {
+std::string shown(double v) {
+  std::ostringstream o;
+  o << v;
+  return o.str();
+}
+}  // namespace
+
+double Args::number_or(const std::string& name, double fallback, double min, double max, bool min_open) const {
+  auto v = value(name);
+  if (!v) return fallback;
+  double d = 0;
+  auto [ptr, ec] = std::from_chars(v->data(), v->data() + v->size(), d);
+  const bool in = ec == std::errc() && ptr == v->data() + v->size() && !v->empty() && std::isfinite(d) &&
+                  (min_open ? d > min : d >= min) && d <= max;
+  if (!in)
+    throw UsageError("option " + name + " expects a number in " + (min_open ? "(" : "[") + shown(min) + ", " + shown(max) +
+                     "], got '" + *v + "'");
+  return d;
+}
+
+std::uint64_t Args::u64_value_or(const std::string& name, std::uint64_t fallback, std::uint64_t max) const {
+  auto v = value(name);
+  if (!v) return fallback;
+  std::uint64_t n = 0;
+  auto [ptr, ec] = std::from_chars(v->data(), v->data() + v->size(), n);
+  if (v->empty() || ec != std::errc() || ptr != v->data() + v->size() || n > max)
+    throw UsageError("option " + name + " expects an integer in [0, " + std::to_string(max) + "], got '" + *v + "'");
   return n;
 }
 

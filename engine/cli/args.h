@@ -1,6 +1,7 @@
 // Command-line parsing shared by every subcommand: `--name value`, `--name=value`,
 // boolean `--flag`, and positionals. Anything not declared is a usage error.
 #pragma once
+#include <cstdint>
 #include <map>
 #include <optional>
 #include <set>
@@ -24,6 +25,11 @@ class Args {
   std::optional<std::string> value(const std::string& name) const;
   std::string value_or(const std::string& name, const std::string& fallback) const;
   int int_value_or(const std::string& name, int fallback, int min, int max) const;
+  // A finite number in [min, max] (in (min, max] with min_open), or the fallback when the
+  // option is absent; anything else (text, NaN, infinities, out of range) is a UsageError
+  // naming the option and the range. Every number an option takes is parsed here, once.
+  double number_or(const std::string& name, double fallback, double min, double max, bool min_open = false) const;
+  std::uint64_t u64_value_or(const std::string& name, std::uint64_t fallback, std::uint64_t max) const;
   const std::vector<std::string>& positionals() const { return positionals_; }
   // Throws UsageError unless the count of positionals is within [min, max].
   void expect_positionals(std::size_t min, std::size_t max) const;

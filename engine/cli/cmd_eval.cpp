@@ -41,7 +41,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i);
   const auto sims = run::simulate_scenes(scenes, spec.seed, spec.seconds_per_scene, std::max(0.1, spec.history_s), err);
   run::RunOptions o;
-  if (const auto b = a.value("--beta")) o.beta = std::stod(*b);
+  o.beta = a.number_or("--beta", o.beta, 0, 1);
   const run::StreamEvalResult r = run::evaluate_stream(spec.weights, sims, o);
   std::ostringstream t;
   t << std::fixed << std::setprecision(1) << "deployed path (yelan run, its own depth), " << scenes.size() << " scenes, "
@@ -69,11 +69,10 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   train::EvalSpec spec;
   spec.weights = *wpath;
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
-  spec.seconds_per_scene = std::stod(a.value_or("--seconds", "1"));
+  spec.seconds_per_scene = a.number_or("--seconds", 1, 0, 3600, true);
   spec.true_mask = a.flag("--true-mask");
   spec.floors = !a.flag("--no-floors");
-  spec.history_s = std::stod(a.value_or("--history", "5"));
-  if (!(spec.history_s >= 0 && spec.history_s <= 60)) throw UsageError("--history: expected 0-60 seconds");
+  spec.history_s = a.number_or("--history", 5, 0, 60);
   if (data) {
     try {
       spec.recordings = camera::sim::list_recordings(*data);

@@ -60,17 +60,6 @@ CameraChoice take_camera(std::vector<std::string>& argv) {
   return c;
 }
 
-double number(const Args& a, const std::string& name, const std::string& fallback) {
-  const std::string v = a.value_or(name, fallback);
-  try {
-    std::size_t used = 0;
-    const double d = std::stod(v, &used);
-    if (used == v.size()) return d;
-  } catch (const std::exception&) {
-  }
-  throw UsageError("option " + name + " expects a number, got '" + v + "'");
-}
-
 }  // namespace
 
 int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ostream& err) {
@@ -109,10 +98,10 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
     set_threads(*n);
   }
   run::RunOptions& opt = setup.options;
-  opt.rate_hz = number(a, "--rate", "50");
-  opt.beta = a.flag("--no-early-exit") ? 2.0 : number(a, "--beta", "0.99");
-  opt.body_height_mm = number(a, "--height-mm", "1700");
-  opt.fixed_depth_mm = number(a, "--depth-mm", "0");
+  opt.rate_hz = a.number_or("--rate", 50, 0, 10000, true);
+  opt.beta = a.flag("--no-early-exit") ? 2.0 : a.number_or("--beta", 0.99, 0, 1);
+  opt.body_height_mm = a.number_or("--height-mm", 1700, 500, 2500);
+  opt.fixed_depth_mm = a.number_or("--depth-mm", 0, 100, 100000);  // absent: the body-height prior
   opt.skip_empty = !a.flag("--keep-empty");
   if (a.value("--crop-margin")) opt.crop_margin = a.int_value_or("--crop-margin", 0, 0, 4096);
 

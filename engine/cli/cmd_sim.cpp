@@ -140,7 +140,7 @@ int run_grid(const std::string& which, const Args& a, std::ostream& out, std::os
   if (int(names.size()) > limit) names.resize(std::size_t(limit));
   if (names.empty()) throw UsageError("sim --grid " + which + ": the filters leave no scene");
   const double duration = parse_duration(a.value_or("--duration", "2s"));
-  const std::uint64_t seed = std::stoull(a.value_or("--seed", "1"));
+  const std::uint64_t seed = a.u64_value_or("--seed", 1, (1ull << 48) - 1);
   std::filesystem::create_directories(*dir);
   std::ostringstream manifest;
   manifest << "{\"format\": \"yelan-sim-manifest\", \"grid\": \"" << which << "\", \"seed\": " << seed
@@ -184,10 +184,7 @@ int run_grid(const std::string& which, const Args& a, std::ostream& out, std::os
 int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::ostream& err) {
   sim::DatasetSpec d;
   d.out_dir = dir;
-  const std::string seed = a.value_or("--seed", "1");
-  if (seed.empty() || seed.size() > 15 || seed.find_first_not_of("0123456789") != std::string::npos)
-    throw UsageError("--seed '" + seed + "': expected an integer 0..999999999999999");
-  d.seed = std::stoull(seed);
+  d.seed = a.u64_value_or("--seed", 1, (1ull << 48) - 1);
   d.train = a.int_value_or("--train", d.train, 0, 1 << 20);
   d.val = a.int_value_or("--val", d.val, 0, 1 << 20);
   d.test = a.int_value_or("--test", d.test, 0, 1 << 20);
@@ -255,11 +252,7 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
     spec = sim::spec_from_json(text.str(), *config);
     if (spec.name.empty()) spec.name = std::filesystem::path(*config).stem().string();
   }
-  if (const auto s = a.value("--seed")) {
-    if (s->empty() || s->find_first_not_of("0123456789") != std::string::npos)
-      throw UsageError("--seed '" + *s + "': expected a non-negative integer");
-    spec.seed = std::stoull(*s);
-  }
+  spec.seed = a.u64_value_or("--seed", spec.seed, (1ull << 48) - 1);
   if (const auto d = a.value("--duration")) spec.duration_s = parse_duration(*d);
   return run_one(spec, a, out, err);
 }

@@ -116,21 +116,20 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.patience = a.int_value_or("--patience", 10, 1, 1 << 20);
   spec.val_windows = a.int_value_or("--val-windows", data ? 48 : 16, 1, 1 << 20);
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
-  spec.adam.lr = std::stod(a.value_or("--lr", "1e-3"));
+  spec.adam.lr = a.number_or("--lr", 1e-3, 0, 1, true);
   spec.adam.step_size = a.int_value_or("--lr-step-epochs", spec.stage == "mask" ? 5 : 10, 1, 1 << 20);
   spec.adam.weight_decay = 1e-5;
   spec.lr_schedule = a.value_or("--lr-schedule", "cosine");
   if (spec.lr_schedule != "cosine" && spec.lr_schedule != "step")
     throw UsageError("--lr-schedule '" + spec.lr_schedule + "': expected cosine or step");
   spec.warmup_steps = a.int_value_or("--warmup-steps", std::min<int>(100, int(spec.steps / 10)), 0, 1 << 30);
-  spec.history_s = std::stod(a.value_or("--history", "5"));
-  if (!(spec.history_s >= 0 && spec.history_s <= 60)) throw UsageError("--history: expected 0-60 seconds");
+  spec.history_s = a.number_or("--history", 5, 0, 60);
   spec.occlusion = a.flag("--occlusion");
   spec.mask_weights = a.value_or("--mask-weights", "");
   spec.init_weights = a.value_or("--init", "");
-  spec.checkpoint_minutes = std::stod(a.value_or("--checkpoint-minutes", "10"));
-  spec.max_minutes = std::stod(a.value_or("--max-minutes", "0"));
-  spec.max_cpu_minutes = std::stod(a.value_or("--max-cpu-minutes", "0"));
+  spec.checkpoint_minutes = a.number_or("--checkpoint-minutes", 10, 0, 1e6, true);
+  spec.max_minutes = a.number_or("--max-minutes", 0, 0, 1e7, true);  // absent: no limit
+  spec.max_cpu_minutes = a.number_or("--max-cpu-minutes", 0, 0, 1e7, true);
   spec.resume = a.flag("--resume");
   spec.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   if (const auto t = a.value("--threads")) {
