@@ -150,3 +150,12 @@ TEST_CASE("numbers out of range are refused with exit 2 before any work, naming 
     CHECK_FALSE(has(r.err, "stoull"));
   }
 }
+
+TEST_CASE("eval --scenes M limits any scene list to M seeded picks", "[cli]") {
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const Result r = cli({"eval", "--weights", M, "--sim", "train", "--scenes", "1", "--seconds", "0.04", "--history", "0.1",
+                        "--no-floors"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(has(r.out, ", 1 scenes,"));
+}

@@ -8,6 +8,7 @@
 #include "camera/io/event_writer.h"
 #include "camera/sim/presets.h"
 #include "camera/sim/recording_windows.h"
+#include "camera/sim/rng.h"
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
@@ -84,6 +85,15 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
       spec.scenes.push_back(camera::sim::preset_spec(n));
   } else {
     spec.scenes = scenes_from(*simv);
+    // --scenes M: M of them drawn with the seed (all when the list is shorter).
+    const int m = a.int_value_or("--scenes", int(spec.scenes.size()), 1, 1 << 20);
+    std::vector<camera::sim::SimSpec> picked;
+    for (std::size_t i = 0; i < spec.scenes.size() && int(picked.size()) < m; ++i) {
+      const std::size_t j = i + camera::sim::hash64(spec.seed, 0x5ce7e5, i) % (spec.scenes.size() - i);
+      std::swap(spec.scenes[i], spec.scenes[j]);
+      picked.push_back(spec.scenes[i]);
+    }
+    spec.scenes = picked;
   }
   if (const auto t = a.value("--threads")) {
     const auto n = parse_thread_count(*t);
