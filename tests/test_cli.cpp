@@ -1,5 +1,6 @@
 #include <catch2/catch.hpp>
 
+#include <filesystem>
 #include <sstream>
 
 #include "engine/cli/args.h"
@@ -158,4 +159,27 @@ TEST_CASE("eval --scenes M limits any scene list to M seeded picks", "[cli]") {
   INFO(r.err);
   REQUIRE(r.code == 0);
   CHECK(has(r.out, ", 1 scenes,"));
+}
+
+TEST_CASE("run refuses outputs it cannot write or that are its input, before any work", "[cli]") {
+  yelan::test::CliTempDir d("run-outputs");
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const std::string in = d / "in.yelan.h5";
+  std::filesystem::copy_file(std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5", in);
+  const std::string before = yelan::test::slurp(in);
+  const Result same = cli({"run", "--weights", M, in, "--out", in});
+  CHECK(same.code == 2);
+  CHECK(has(same.err, "is an input of this run"));
+  CHECK(yelan::test::slurp(in) == before);  // the input untouched
+  for (const char* flag : {"--out", "--stats-json"}) {
+    INFO(flag);
+    const std::string ext = std::string(flag) == "--out" ? ".csv" : ".json";
+    const Result proc = cli({"run", "--weights", M, in, flag, "/proc/x" + ext});
+    CHECK(proc.code == 2);
+    CHECK(has(proc.err, "cannot write in /proc"));
+    const Result nodir = cli({"run", "--weights", M, in, flag, d / ("nodir/x" + ext)});
+    CHECK(nodir.code == 2);
+    CHECK(has(nodir.err, "no directory"));
+    CHECK(nodir.out.empty());  // refused before inference: no run report
+  }
 }

@@ -81,8 +81,14 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   RunSetup setup;
   setup.weights = *w;
   setup.out = a.value("--out");
-  if (setup.out) check_pose_output(*setup.out);
+  std::vector<std::string> inputs = {*w};
+  if (!a.positionals().empty()) inputs.push_back(a.positionals()[0]);
+  if (setup.out) {
+    check_pose_output(*setup.out);
+    check_output("--out", *setup.out, inputs);
+  }
   setup.stats_json = a.value("--stats-json");
+  if (setup.stats_json) check_output("--stats-json", *setup.stats_json, inputs);
   setup.viz_dir = a.value("--viz");
   if (setup.viz_dir) {
     try {

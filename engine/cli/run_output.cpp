@@ -1,5 +1,13 @@
 #include "engine/cli/run_output.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include <filesystem>
+
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
@@ -20,6 +28,24 @@ std::string extension(const std::string& path) { return std::filesystem::path(pa
 void check_pose_output(const std::string& path) {
   const std::string ext = extension(path);
   if (ext != ".csv" && ext != ".json" && ext != ".h5") throw UsageError("--out " + path + ": expected .csv, .json or .h5");
+}
+
+void check_output(const std::string& flag, const std::string& path, const std::vector<std::string>& inputs) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty()) throw UsageError(flag + ": empty path");
+  if (fs::is_directory(path, ec)) throw UsageError(flag + " " + path + ": is a directory");
+  const fs::path parent = fs::absolute(path, ec).parent_path();
+  if (!fs::is_directory(parent, ec)) throw UsageError(flag + " " + path + ": no directory " + parent.string());
+  // Root passes access(2) everywhere; creating (and removing) a probe file is the real test.
+  const std::string probe = (parent / ("." + fs::path(path).filename().string() + ".probe-" + std::to_string(::getpid()))).string();
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW, 0600);
+  if (fd < 0) throw UsageError(flag + " " + path + ": cannot write in " + parent.string() + " (" + std::strerror(errno) + ")");
+  ::close(fd);
+  ::unlink(probe.c_str());
+  for (const auto& in : inputs)
+    if (fs::exists(in, ec) && fs::exists(path, ec) && fs::equivalent(in, path, ec))
+      throw UsageError(flag + " " + path + " is an input of this run: refusing to overwrite it");
 }
 
 void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
@@ -130,7 +156,8 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
   }
   if (setup_.stats_json) {
     const run::RunStats& s = pipe_.stats();
-    std::ofstream f(*setup_.stats_json);
+    camera::TempFile tmp(*setup_.stats_json);
+    std::ofstream f(tmp.path());
     f << "{\"poses_per_s\": " << double(s.poses) / wall_s << ", \"p50_ms\": " << run::percentile(s.times.tick_ms, 0.5)
       << ", \"p99_ms\": " << run::percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << stage1_share()
       << ", \"threads\": " << yelan::threads() << ", \"config\": \"" << pipe_.config_name() << "\", \"poses\": " << s.poses
@@ -138,6 +165,9 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
       << ", \"crop_share\": " << run::crop_share(s)
       << ", \"early_exit_saved_ms\": " << run::early_exit_saved_ms(s) << ", \"early_exit_saved_share\": " << saved_share()
       << "}\n";
+    if (!f.flush()) throw std::runtime_error("cannot write " + tmp.path());
+    f.close();
+    tmp.commit();
   }
 }
 
