@@ -18,7 +18,8 @@ MASK_STEPS=${MASK_STEPS:-4000}
 what=${1:-all}
 
 dataset() {
-  "$Y" sim --dataset "$DATA" --seed 1 --train 320 --val 32 --test 0 --duration 5s --threads 2
+  "$Y" sim --dataset "$DATA" --seed 1 --train 320 --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
+    --threads 2
 }
 
 # train STAGE NAME STEPS [extra flags]: resumes when NAME has a checkpoint.
