@@ -151,9 +151,10 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         << std::setprecision(1) << all.scores().mpjpe_mm << " mm\n";
   }
   res.all = all.scores();
-  res.mask_iou = uni > 0 ? inter / uni : 0;
+  res.mask_iou = spec.true_mask ? -1 : uni > 0 ? inter / uni : 0;
   for (const auto& [name, values] : cond)
-    for (const auto& [value, m] : values) res.by_condition[name][value] = m.scores();
+    for (const auto& [value, m] : values)
+      if (m.scores().frames > 0) res.by_condition[name][value] = m.scores();  // empty scenes score no frame
   res.scenes = total;
   if (floors) res.floors = floors->scores();
   res.swap_share_by_view = swaps.by_view();
@@ -175,7 +176,7 @@ std::string eval_json(const EvalResult& r) {
   nlohmann::ordered_json j = scores_json(r.all);
   j["config"] = r.config;
   j["scenes"] = r.scenes;
-  j["mask_iou"] = r.mask_iou;
+  j["mask_iou"] = r.mask_iou >= 0 ? nlohmann::ordered_json(r.mask_iou) : nlohmann::ordered_json(nullptr);
   nlohmann::ordered_json pj;
   for (int i = 0; i < kJoints; ++i)
     pj[kJointNames[i]] = r.all.joint_frames[std::size_t(i)] ? nlohmann::ordered_json(r.all.mpjpe_per_joint[std::size_t(i)])
@@ -200,7 +201,8 @@ std::string eval_table(const EvalResult& r) {
   o << "config " << r.config << ", " << r.scenes << " scenes, " << r.all.frames << " frames\n"
     << "MPJPE " << r.all.mpjpe_mm << " mm, PCK@150 " << std::setprecision(3) << r.all.pck150 << ", AUC " << r.all.auc
     << std::setprecision(1) << "; root-aligned: MPJPE " << r.all.mpjpe_root_mm << " mm, PCK@150 " << std::setprecision(3)
-    << r.all.pck150_root << ", AUC " << r.all.auc_root << "; mask IoU " << r.mask_iou << "\n";
+    << r.all.pck150_root << ", AUC " << r.all.auc_root << "; mask IoU "
+    << (r.mask_iou >= 0 ? std::to_string(r.mask_iou).substr(0, 5) : std::string("n/a (true masks)")) << "\n";
   o << std::setprecision(1) << "per joint (mm):";
   for (int i = 0; i < kJoints; ++i) {
     o << " " << kJointNames[i] << " ";

@@ -29,7 +29,7 @@ struct EvalSpec {
 
 struct EvalResult {
   PoseScores all;
-  double mask_iou = 0;
+  double mask_iou = 0;  // -1 with true masks (no stage 1 ran): n/a
   // condition name -> value -> scores (lighting, background, view, character, clothing, occlusion)
   std::map<std::string, std::map<std::string, PoseScores>> by_condition;
   std::string config;
