@@ -185,6 +185,7 @@ std::optional<std::string> read_attr_string(hid_t loc, const std::string& name) 
     char* s = nullptr;
     H5Id mem = check(H5Tcopy(H5T_C_S1), "string type");
     H5Tset_size(mem.get(), H5T_VARIABLE);
+    H5Tset_cset(mem.get(), H5Tget_cset(type.get()));  // h5py writes UTF-8: the memory type must agree
     check(H5Aread(attr.get(), mem.get(), &s), "cannot read attribute " + name);
     std::string v = s ? s : "";
     H5free_memory(s);

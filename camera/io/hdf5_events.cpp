@@ -103,6 +103,12 @@ class Hdf5Reader final : public EventReader {
       info_.format = "yelan-h5";
       if (auto w = h5::read_attr_i64(f, "width")) info_.width = static_cast<int>(std::clamp<std::int64_t>(*w, 0, 65536));
       if (auto h = h5::read_attr_i64(f, "height")) info_.height = static_cast<int>(std::clamp<std::int64_t>(*h, 0, 65536));
+      // SPEC 2 puts the sensor size in /camera; our writer adds the root attributes, other
+      // writers need not.
+      if (info_.width == 0 && h5::exists(f, "camera/width"))
+        if (auto w = h5::read_scalar_i64(f, "camera/width")) info_.width = static_cast<int>(std::clamp<std::int64_t>(*w, 0, 65536));
+      if (info_.height == 0 && h5::exists(f, "camera/height"))
+        if (auto h = h5::read_scalar_i64(f, "camera/height")) info_.height = static_cast<int>(std::clamp<std::int64_t>(*h, 0, 65536));
       open_columns("events");
       open_ms_index("events/ms_to_idx");
       if (ms_to_idx_.valid()) {

@@ -1,6 +1,7 @@
 // DSEC and v2e HDF5 layouts, built here with the HDF5 C API (no public sample in shared data).
 #include <catch2/catch.hpp>
 
+#include "camera/io/event_writer.h"
 #include "camera/io/h5.h"
 #include "io_test_util.h"
 
@@ -83,4 +84,42 @@ TEST_CASE("HDF5 files with mismatched or missing columns are refused", "[io][h5]
     h5::H5Id g = h5::create_group(f.get(), "other");
   }
   CHECK_THROWS_WITH(yelan::camera::open_event_file(path), Catch::Contains("holds no events"));
+}
+
+TEST_CASE("our layout written by another tool: variable-length UTF-8 strings, sensor size in /camera only", "[io][h5]") {
+  ScratchDir dir("foreign");
+  const std::string path = dir.file("foreign.yelan.h5");
+  {
+    yelan::camera::StreamInfo info;
+    info.width = 346, info.height = 260;
+    auto w = yelan::camera::open_yelan_h5_writer(path, info);
+    const std::vector<Event> ev = {{10, 1, 2, 1}, {20, 345, 259, 0}, {30, 7, 8, 1}};
+    w->write(ev);
+    w->close();
+  }
+  {
+    // As h5py writes `f.attrs['format'] = 'yelan-recording'` (a variable-length UTF-8 string),
+    // with the sensor size in /camera/{width,height} (SPEC 2) and no root width/height.
+    h5::H5Id f = h5::check(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), "open");
+    for (const char* a : {"format", "width", "height"})
+      if (H5Aexists(f.get(), a) > 0) H5Adelete(f.get(), a);
+    h5::H5Id type = h5::check(H5Tcopy(H5T_C_S1), "type");
+    H5Tset_size(type.get(), H5T_VARIABLE);
+    H5Tset_cset(type.get(), H5T_CSET_UTF8);
+    h5::H5Id space = h5::check(H5Screate(H5S_SCALAR), "space");
+    h5::H5Id attr = h5::check(H5Acreate2(f.get(), "format", type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), "attr");
+    const char* text = "yelan-recording";
+    h5::check(H5Awrite(attr.get(), type.get(), &text), "write attr");
+    h5::H5Id cam = h5::create_group(f.get(), "camera");
+    for (const auto& [name, v] : {std::pair<const char*, std::int64_t>{"width", 346}, {"height", 260}}) {
+      h5::H5Id s = h5::check(H5Screate(H5S_SCALAR), "space");
+      h5::H5Id d = h5::check(H5Dcreate2(cam.get(), name, H5T_STD_I64LE, s.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+      h5::check(H5Dwrite(d.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v), name);
+    }
+  }
+  auto r = yelan::camera::open_event_file(path);
+  CHECK(r->info().format == "yelan-h5");
+  CHECK(r->info().width == 346);
+  CHECK(r->info().height == 260);
+  CHECK(read_all(*r).size() == 3);
 }
