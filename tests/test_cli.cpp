@@ -183,3 +183,52 @@ TEST_CASE("run refuses outputs it cannot write or that are its input, before any
     CHECK(nodir.out.empty());  // refused before inference: no run report
   }
 }
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+TEST_CASE("Ctrl-C or SIGTERM during sim, convert or repr leaves no temporary file", "[cli]") {
+  yelan::test::CliTempDir d("signals");
+  const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
+  const std::vector<std::vector<std::string>> commands = {
+      {"sim", "--preset", "front-high-dynamic", "--duration", "60s", "-o", d / "s.yelan.h5", "--quiet"},
+      {"convert", D, d / "c.txt"},
+      {"repr", "--type", "tore", "--fps", "2000", D, d / "r.h5"},
+  };
+  for (const auto& cmd : commands)
+    for (const int sig : {SIGINT, SIGTERM}) {
+      INFO(cmd[0] << " signal " << sig);
+      const pid_t child = ::fork();
+      REQUIRE(child >= 0);
+      if (child == 0) {
+        std::vector<char*> argv = {const_cast<char*>(YELAN_BINARY)};
+        for (const auto& a : cmd) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        ::execv(YELAN_BINARY, argv.data());
+        ::_exit(127);
+      }
+      // Wait until the temporary file exists (or the command finished: too fast to interrupt).
+      auto temps = [&] {
+        int n = 0;
+        for (const auto& e : std::filesystem::directory_iterator(d.p)) n += e.path().string().find(".tmp-") != std::string::npos;
+        return n;
+      };
+      int status = 0;
+      bool done = false;
+      for (int i = 0; i < 2000 && temps() == 0; ++i) {
+        if (::waitpid(child, &status, WNOHANG) == child) {
+          done = true;
+          break;
+        }
+        ::usleep(5000);
+      }
+      if (!done) {
+        ::kill(child, sig);
+        REQUIRE(::waitpid(child, &status, 0) == child);
+        CHECK(WIFSIGNALED(status));
+      }
+      CHECK(temps() == 0);
+      for (const auto& e : std::filesystem::directory_iterator(d.p)) std::filesystem::remove_all(e.path());
+    }
+}

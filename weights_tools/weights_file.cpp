@@ -9,6 +9,7 @@
 #include <system_error>
 
 #include "camera/io/h5.h"
+#include "camera/io/temp_file.h"
 #include "weights_tools/json.h"
 
 namespace yelan::weights {
@@ -276,8 +277,9 @@ void save_weights(const std::string& path, const Weights& w) {
         throw std::invalid_argument("weights tensor '" + g + "/" + name + "': bad name or " +
                                     std::to_string(t.data.size()) + " values for shape " + shape_text(t.shape));
   }
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
-  try {
+  camera::TempFile tmp_file(path);
+  const std::string& tmp = tmp_file.path();
+  {
     {
       Id fcpl = untimed(H5P_FILE_CREATE, tmp);
       Id file = must(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, fcpl.get(), H5P_DEFAULT), tmp, "cannot create file");
@@ -313,12 +315,8 @@ void save_weights(const std::string& path, const Weights& w) {
       }
       must(H5Fflush(root, H5F_SCOPE_GLOBAL), tmp, "cannot flush");
     }
-    fs::rename(tmp, path);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw;
   }
+  tmp_file.commit();
 }
 
 }  // namespace yelan::weights

@@ -75,7 +75,7 @@ struct Weights {
 };
 
 Weights load_weights(const std::string& path);
-// Writes `<path>.tmp-<pid>` and renames it over `path`; nothing is left behind on failure.
+// Writes a TempFile beside `path` and renames it over `path`; nothing is left behind on failure.
 void save_weights(const std::string& path, const Weights& w);
 
 }  // namespace yelan::weights

@@ -1,5 +1,7 @@
 #include "benchmarks/kernels/chart.h"
 
+#include "camera/io/temp_file.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -25,7 +27,8 @@ void write_bar_chart_svg(const std::string& path, const std::string& title, cons
                          double max_value) {
   const int label_w = 300, plot_w = 500, row_h = 18, top = 40;
   const int height = top + int(bars.size()) * row_h + 30;
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  camera::TempFile tmp_file(path);
+  const std::string& tmp = tmp_file.path();
   {
     std::ofstream f(tmp);
     if (!f) throw std::runtime_error("cannot write " + tmp);
@@ -56,10 +59,7 @@ void write_bar_chart_svg(const std::string& path, const std::string& title, cons
     f << "</svg>\n";
     if (!f.flush()) throw std::runtime_error("write failed: " + tmp);
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot rename " + tmp + " to " + path);
-  }
+  tmp_file.commit();
 }
 
 }  // namespace yelan::bench

@@ -31,20 +31,4 @@ std::unique_ptr<EventWriter> open_event_writer(const std::string& path, const St
                               "' (use .yelan.h5, .h5, .aedat4 or .txt)");
 }
 
-std::string temp_path_for(const std::string& path) {
-  return path + ".tmp-" + std::to_string(static_cast<long>(::getpid()));
-}
-
-TempFile::TempFile(std::string final_path) : final_(std::move(final_path)), temp_(temp_path_for(final_)) {}
-
-TempFile::~TempFile() {
-  if (!committed_) std::remove(temp_.c_str());
-}
-
-void TempFile::commit() {
-  if (std::rename(temp_.c_str(), final_.c_str()) != 0)
-    throw std::runtime_error("cannot rename " + temp_ + " to " + final_ + ": " + std::strerror(errno));
-  committed_ = true;
-}
-
 }  // namespace yelan::camera

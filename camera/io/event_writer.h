@@ -1,7 +1,7 @@
 // Writing event files: ours (HDF5), AEDAT 4.0 and text. Writers stream (bounded memory) into
-// `<out>.tmp-<pid>` and rename it over `out` in close(), so a crash or an error never leaves
-// a half-written file under the real name. A writer destroyed without close() removes its
-// temporary file.
+// a TempFile (camera/io/temp_file.h) renamed over `out` in close(), so a crash or an error
+// never leaves a half-written file under the real name. A writer destroyed without close()
+// removes its temporary file.
 #pragma once
 #include <memory>
 #include <span>
@@ -9,6 +9,7 @@
 
 #include "camera/event.h"
 #include "camera/io/event_reader.h"
+#include "camera/io/temp_file.h"
 
 namespace yelan::camera {
 
@@ -34,23 +35,5 @@ std::unique_ptr<EventWriter> open_yelan_h5_writer(const std::string& path, const
 // recording can add its groups (camera, labels, masks) before close(); throws
 // std::invalid_argument for any other writer.
 std::int64_t yelan_h5_file(EventWriter& writer);
-
-// The temporary name beside `path` that writers fill before renaming.
-std::string temp_path_for(const std::string& path);
-
-// Owns a temporary path: commit() renames it to the final path; otherwise it is removed.
-class TempFile {
- public:
-  explicit TempFile(std::string final_path);
-  ~TempFile();
-  TempFile(const TempFile&) = delete;
-  TempFile& operator=(const TempFile&) = delete;
-  const std::string& path() const { return temp_; }
-  void commit();
-
- private:
-  std::string final_, temp_;
-  bool committed_ = false;
-};
 
 }  // namespace yelan::camera

@@ -1,5 +1,7 @@
 #include "camera/repr/preview_png.h"
 
+#include "camera/io/temp_file.h"
+
 #include <png.h>
 #include <unistd.h>
 
@@ -54,7 +56,8 @@ void write_png_rgb(const std::string& path, int width, int height, const std::ve
   if (width <= 0 || height <= 0 || rgb.size() != std::size_t(width) * height * 3)
     throw std::runtime_error(path + ": cannot write PNG: pixel buffer does not match " +
                              std::to_string(width) + "x" + std::to_string(height));
-  const std::string tmp = path + ".tmp-" + std::to_string(::getpid());
+  TempFile tmp_file(path);
+  const std::string& tmp = tmp_file.path();
   {
     std::unique_ptr<std::FILE, FileCloser> file(std::fopen(tmp.c_str(), "wb"));
     if (!file) throw std::runtime_error(path + ": cannot write PNG: cannot create " + tmp);
@@ -74,15 +77,13 @@ void write_png_rgb(const std::string& path, int width, int height, const std::ve
     } catch (const std::exception& e) {
       png_destroy_write_struct(&png, &info);
       file.reset();
-      std::remove(tmp.c_str());
       throw std::runtime_error(path + ": cannot write PNG: " + e.what());
     }
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot write PNG: rename: " + ec.message());
+  try {
+    tmp_file.commit();
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": cannot write PNG: " + e.what());
   }
 }
 

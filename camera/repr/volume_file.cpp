@@ -91,7 +91,8 @@ VolumeFileWriter::VolumeFileWriter(std::string path, std::string type, int chann
                                    const std::vector<std::pair<std::string, std::int64_t>>& int_attrs)
     : path_(std::move(path)), channels_(channels), height_(height), width_(width) {
   if (channels <= 0 || height <= 0 || width <= 0) fail(path_, "empty volume shape");
-  tmp_path_ = path_ + ".tmp-" + std::to_string(::getpid());
+  tmp_ = std::make_unique<TempFile>(path_);
+  tmp_path_ = tmp_->path();
   QuietHdf5 quiet;
   file_ = H5Fcreate(tmp_path_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file_ < 0) fail(path_, "cannot create " + tmp_path_);
@@ -106,7 +107,6 @@ VolumeFileWriter::VolumeFileWriter(std::string path, std::string type, int chann
     for (const auto& [name, value] : int_attrs) write_int_attr(file_, name.c_str(), value);
   } catch (const std::exception& e) {
     close_handles();
-    std::remove(tmp_path_.c_str());
     fail(path_, e.what());
   }
 }
@@ -131,9 +131,11 @@ void VolumeFileWriter::finish() {
   const bool flushed = H5Fflush(file_, H5F_SCOPE_GLOBAL) >= 0;
   close_handles();
   if (!flushed) fail(tmp_path_, "flush failed");
-  std::error_code ec;
-  std::filesystem::rename(tmp_path_, path_, ec);
-  if (ec) fail(path_, "rename from " + tmp_path_ + ": " + ec.message());
+  try {
+    tmp_->commit();
+  } catch (const std::exception& e) {
+    fail(path_, e.what());
+  }
   finished_ = true;
 }
 
@@ -147,8 +149,7 @@ void VolumeFileWriter::close_handles() noexcept {
 VolumeFileWriter::~VolumeFileWriter() {
   if (finished_) return;
   QuietHdf5 quiet;
-  close_handles();
-  std::remove(tmp_path_.c_str());
+  close_handles();  // the TempFile removes the file
 }
 
 }  // namespace yelan::camera

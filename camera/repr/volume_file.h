@@ -2,9 +2,12 @@
 // `volumes` (N x C x H x W float32, chunked one volume per chunk, gzip level 1) and `t`
 // (N int64, microseconds), root attributes `format = "yelan-repr"`, `type`, and whatever
 // integer attributes the caller adds. The file appears atomically: everything goes to
-// `<path>.tmp-<pid>`, renamed over `path` by finish(); a writer destroyed without finish()
+// a TempFile beside `path`, renamed over it by finish(); a writer destroyed without finish()
 // removes its temporary file and leaves `path` untouched.
 #pragma once
+#include <memory>
+
+#include "camera/io/temp_file.h"
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -30,6 +33,7 @@ class VolumeFileWriter {
   void close_handles() noexcept;
 
   std::string path_, tmp_path_;
+  std::unique_ptr<TempFile> tmp_;
   int channels_, height_, width_;
   std::int64_t count_ = 0;
   std::int64_t file_ = -1, volumes_ = -1, times_ = -1;  // hid_t, kept opaque here

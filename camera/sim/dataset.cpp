@@ -170,7 +170,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
       jobs.push_back(j);
     }
   }
-  // Temporary files of a run that was killed (name.tmp-PID, its process gone) are removed:
+  // Temporary files of a run that was killed (name.tmp-PID-XXXXXX, its process gone) are removed:
   // their recordings are simulated again.
   for (const char* split : {"train", "val", "test"}) {
     std::error_code ec;
@@ -178,7 +178,8 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
       const std::string n = e.path().filename().string();
       const auto at = n.rfind(".tmp-");
       if (at == std::string::npos) continue;
-      const std::string pid = n.substr(at + 5);
+      std::string pid = n.substr(at + 5);  // name.tmp-PID-XXXXXX
+      pid = pid.substr(0, pid.find('-'));
       if (pid.empty() || pid.find_first_not_of("0123456789") != std::string::npos || pid.size() > 9) continue;
       if (::kill(pid_t(std::stol(pid)), 0) != 0 && errno == ESRCH) fs::remove(e.path(), ec);
     }

@@ -22,16 +22,6 @@ std::vector<camera::sim::SimSpec> scenes_from(const std::string& text);  // cmd_
 
 namespace {
 
-void write_atomically(const std::string& path, const std::string& text) {
-  const std::string tmp = camera::temp_path_for(path);
-  {
-    std::ofstream f(tmp);
-    f << text;
-    if (!f) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::filesystem::rename(tmp, path);
-}
-
 // The deployed path: `yelan run`'s pipeline on the test scenes (events in time order, TORE of
 // everything so far, stage 1 with the model's early exit, its own depth from the body-height
 // prior), each pose scored against the label at its time; root-aligned is the figure to
@@ -52,7 +42,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     << " mm; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks\n";
   out << t.str();
   if (const auto j = a.value("--json"))
-    write_atomically(*j, "{\"deployed\": " + train::pose_scores_json(r.deployed) + ", \"paper\": " +
+    camera::write_file_atomically(*j, "{\"deployed\": " + train::pose_scores_json(r.deployed) + ", \"paper\": " +
                              train::pose_scores_json(r.paper) + ", \"scenes\": " + std::to_string(scenes.size()) +
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) + "}\n");
   return kOk;
@@ -103,7 +93,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (a.flag("--run")) return eval_run(spec, a, out, err);
   const train::EvalResult r = train::evaluate(spec, err);
   out << train::eval_table(r);
-  if (const auto j = a.value("--json")) write_atomically(*j, train::eval_json(r));
+  if (const auto j = a.value("--json")) camera::write_file_atomically(*j, train::eval_json(r));
   return kOk;
 }
 

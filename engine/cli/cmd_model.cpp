@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "camera/io/h5.h"
+#include "camera/io/temp_file.h"
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
@@ -214,8 +215,9 @@ int forward(const Args& a, std::ostream& out) {
     mask.forward(x);
     pose.forward(x, cfg.window);
   }
-  const std::string tmp = *outp + ".tmp-" + std::to_string(::getpid());
-  try {
+  camera::TempFile tmp_file(*outp);
+  const std::string& tmp = tmp_file.path();
+  {
     h5::H5Id f = h5::create_file(tmp);
     auto put = [&](const std::string& name, const layers::Act& a) {
       const auto v = from_blocked(a);
@@ -228,14 +230,8 @@ int forward(const Args& a, std::ostream& out) {
       for (int p = 0; p < 3; ++p) put("heatmaps/stage" + std::to_string(t) + "/" + planes[p], pose.heatmap(t, p));
     write_dataset(f.get(), "joints_norm", {hsize_t(S), hsize_t(cfg.joints), 3}, pose.joints().data());
     h5::write_attr_string(f.get(), "config", cfg.json);
-  } catch (...) {
-    std::remove(tmp.c_str());
-    throw;
   }
-  if (std::rename(tmp.c_str(), outp->c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("cannot rename " + tmp + " to " + *outp);
-  }
+  tmp_file.commit();
   out << "wrote " << *outp << ": " << S << " frames, " << cfg.stages << " stages\n";
   return kOk;
 }

@@ -109,14 +109,11 @@ int write_splits(const std::string& dir, const Args& a, std::ostream& out) {
   const int seed = a.int_value_or("--seed", 1, 0, 1 << 30), scenes = a.int_value_or("--scenes", 48, 1, 1 << 20);
   std::filesystem::create_directories(dir);
   auto write = [&](const std::string& name, const std::string& header, const std::vector<std::string>& names) {
-    const std::string path = (std::filesystem::path(dir) / name).string(), tmp = camera::temp_path_for(path);
-    {
-      std::ofstream f(tmp);
-      f << header << "# regenerate: yelan sim --splits " << dir << " --seed " << seed << " --scenes " << scenes << "\n";
-      for (const auto& n : names) f << n << "\n";
-      if (!f) throw std::runtime_error("cannot write " + tmp);
-    }
-    std::filesystem::rename(tmp, path);
+    const std::string path = (std::filesystem::path(dir) / name).string();
+    std::ostringstream f;
+    f << header << "# regenerate: yelan sim --splits " << dir << " --seed " << seed << " --scenes " << scenes << "\n";
+    for (const auto& n : names) f << n << "\n";
+    camera::write_file_atomically(path, f.str());
     out << path << ": " << names.size() << " scenes\n";
   };
   write("train.txt", "# training split: the 11 training characters x the CMU train clips and procedural dances x\n"
@@ -168,13 +165,7 @@ int run_grid(const std::string& which, const Args& a, std::ostream& out, std::os
   }
   manifest << "]}\n";
   const std::string mpath = (std::filesystem::path(*dir) / "manifest.json").string();
-  const std::string tmp = camera::temp_path_for(mpath);
-  {
-    std::ofstream m(tmp);
-    m << manifest.str();
-    if (!m) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::filesystem::rename(tmp, mpath);
+  camera::write_file_atomically(mpath, manifest.str());
   out << names.size() << " recordings in " << *dir << ", manifest " << mpath << "\n";
   return kOk;
 }

@@ -96,10 +96,10 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   CHECK(std::filesystem::exists(dir / "test" / dataset_file_name(dataset_member("test", 0, 2, 0.5))));
   const auto size = std::filesystem::file_size(path);
   // A killed run's leftovers (pid 999999999 is no process) go; done files stay.
-  std::ofstream(dir / "train" / (first + ".tmp-999999999")) << "partial";
+  std::ofstream(dir / "train" / (first + ".tmp-999999999-abcdef")) << "partial";
   std::filesystem::remove(dir / "val" / dataset_file_name(dataset_member("val", 0, 2, 0.5)));
   CHECK(make_dataset(d, log) == 1);
-  CHECK_FALSE(std::filesystem::exists(dir / "train" / (first + ".tmp-999999999")));
+  CHECK_FALSE(std::filesystem::exists(dir / "train" / (first + ".tmp-999999999-abcdef")));
   CHECK(std::filesystem::file_size(path) == size);
   std::ifstream m(dir / "manifest.json");
   std::stringstream text;
