@@ -248,3 +248,50 @@ TEST_CASE("train: downscale_tore is the plain mean of each cell, bit for bit, on
         }
   }
 }
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+TEST_CASE("train: SIGINT or SIGTERM writes a checkpoint at the step reached and --resume continues from it", "[train][cli]") {
+  for (const int sig : {SIGINT, SIGTERM}) {
+    yelan::test::CliTempDir d("train-signal");
+    const std::string out = d / "run";
+    const std::vector<std::string> args = {"train", "--stage", "pose", "--config", "micro", "--sim",
+                                           "ben-dance3-front-high-static", "--steps", "100000", "--batch", "1",
+                                           "--epoch-steps", "100000", "--val-windows", "1", "-o", out, "--quiet",
+                                           "--threads", "1"};
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+      std::vector<char*> argv = {const_cast<char*>(YELAN_BINARY)};
+      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      ::freopen("/dev/null", "w", stderr);
+      ::execv(YELAN_BINARY, argv.data());
+      ::_exit(127);
+    }
+    auto rows = [&] {
+      std::istringstream in(yelan::test::slurp(out + "/log.csv"));
+      int n = 0;
+      for (std::string l; std::getline(in, l);) n += !l.empty() && l[0] != 's';
+      return n;
+    };
+    for (int i = 0; i < 3000 && rows() < 3; ++i) ::usleep(10000);
+    REQUIRE(rows() >= 3);
+    ::kill(child, sig);
+    int status = 0;
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    CHECK(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 1);
+    const int reached = rows();
+    CHECK(std::filesystem::exists(out + "/checkpoint.state"));
+    auto resumed_args = args;
+    resumed_args[8] = std::to_string(reached + 2);  // --steps
+    resumed_args.push_back("--resume");
+    const auto r = yelan::test::run_cli(resumed_args);
+    INFO(r.err);
+    CHECK(r.code == 0);
+    CHECK(yelan::test::contains(r.err, "at step " + std::to_string(reached)));
+  }
+}

@@ -139,8 +139,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   }
   const train::TrainResult r = train::train(spec, err);
   out << spec.out_dir << ": " << r.steps << " steps, last loss " << r.last_loss << ", best validation " << r.best_val
-      << (r.early_stopped ? " (early stop)" : "") << "\n";
-  return kOk;
+      << (r.early_stopped ? " (early stop)" : "") << (r.interrupted ? " (interrupted; --resume continues)" : "") << "\n";
+  return r.interrupted ? kRuntimeError : kOk;
 }
 
 }  // namespace yelan::cli

@@ -1,6 +1,9 @@
 #include "engine/train/trainer.h"
 
+#include <signal.h>
+
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <ctime>
 #include <cmath>
@@ -31,6 +34,31 @@ namespace sim = camera::sim;
 namespace fs = std::filesystem;
 
 namespace {
+
+// SIGINT / SIGTERM during training: finish the step, write a checkpoint, stop.
+std::atomic<int> g_stop_signal{0};
+void on_stop_signal(int sig) { g_stop_signal.store(sig); }
+
+// Installs the handlers for the run and puts the previous ones back after it.
+class StopOnSignal {
+ public:
+  StopOnSignal() {
+    g_stop_signal.store(0);
+    struct sigaction sa {};
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    ::sigaction(SIGINT, &sa, &old_int_);
+    ::sigaction(SIGTERM, &sa, &old_term_);
+  }
+  ~StopOnSignal() {
+    ::sigaction(SIGINT, &old_int_, nullptr);
+    ::sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  int signal() const { return g_stop_signal.load(); }
+
+ private:
+  struct sigaction old_int_ {}, old_term_ {};
+};
 
 constexpr char kStateMagic[8] = {'Y', 'E', 'L', 'A', 'N', 'T', 'R', 'N'};
 constexpr std::uint32_t kStateVersion = 3;
@@ -366,6 +394,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   pose.set_training(pose_stage);
   double loss = 0, grad_norm = 0;
   TrainResult result;
+  const StopOnSignal stop;
   if (st.bad_epochs >= spec.patience) {
     result.early_stopped = true;
     err << "this run had already stopped early (no better validation loss for " << spec.patience << " epochs)\n";
@@ -460,6 +489,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     }
     if (out_of_time) {
       err << "time limit reached at step " << st.step << " (checkpoint written; --resume continues)\n";
+      break;
+    }
+    if (stop.signal()) {  // the checkpoint is written after the loop
+      result.interrupted = stop.signal();
+      err << (spec.progress_tty ? "\n" : "") << "interrupted at step " << st.step
+          << " (checkpoint written; --resume continues exactly)\n";
       break;
     }
     if (spec.stop_at > 0 && st.step >= spec.stop_at && st.step < spec.steps) {

@@ -60,6 +60,7 @@ struct TrainResult {
   std::int64_t steps = 0;
   double last_loss = 0, best_val = 0;
   bool early_stopped = false;
+  int interrupted = 0;  // the signal (SIGINT, SIGTERM) that stopped the run after a checkpoint
   // This run's part (not resumed ones): training steps' wall time, the share of it spent
   // building batches (reading or simulating windows), CPU seconds, frames trained on.
   double step_s = 0, data_s = 0, cpu_s = 0;
