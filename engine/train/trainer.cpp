@@ -272,8 +272,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   st.lr = spec.adam.lr;
   if (spec.resume) {
     const weights::Weights w = weights::load_weights(ckpt);
-    weights::load_group(w, "mask", mp);
-    weights::load_group(w, "pose", pp);
+    // A checkpoint holds the trained group (older ones both).
+    for (const auto& [g, params] : {std::pair<const char*, layers::ParamList*>{"mask", &mp}, {"pose", &pp}}) {
+      const auto it = w.groups.find(g);
+      if (it != w.groups.end() && !it->second.empty()) weights::load_group(w, g, *params);
+    }
     mask.weights_changed();
     pose.weights_changed();
     st = load_state(state_path, adam.moments().size());
@@ -316,7 +319,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   // Weights first, then the state with the weights' checksum: a stop between the two is
   // detected on --resume instead of mixing two steps.
   auto checkpoint = [&] {
-    weights::save_weights(ckpt, weights::weights_of(cfg, mp, pp));
+    // The trained group only (the other is the frozen mask net or the seeded initialisation,
+    // both rebuilt on --resume): a pose checkpoint is about 1 MB, not the mask net's 8.
+    weights::Weights w = weights::weights_of(cfg, mp, pp);
+    w.groups.erase(pose_stage ? "mask" : "pose");
+    weights::save_weights(ckpt, w);
     st.weights_hash = file_hash(ckpt);
     st.adam_t = adam.steps();
     st.adam_epochs = adam.epochs();
