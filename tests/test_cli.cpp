@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "engine/cli/args.h"
@@ -231,4 +232,24 @@ TEST_CASE("Ctrl-C or SIGTERM during sim, convert or repr leaves no temporary fil
       CHECK(temps() == 0);
       for (const auto& e : std::filesystem::directory_iterator(d.p)) std::filesystem::remove_all(e.path());
     }
+}
+
+TEST_CASE("text from files is shown escaped, and bad input is exit 2 for every command", "[cli]") {
+  yelan::test::CliTempDir d("escaped");
+  {
+    std::ofstream f(d / "esc.raw", std::ios::binary);
+    f << "% evt \x1b]0;pwned\x07\x1b[31mRED\n% end\n";
+  }
+  const Result r = cli({"info", d / "esc.raw"});
+  CHECK(r.code == 2);
+  CHECK(has(r.err, "\\x1b]0;pwned\\x07\\x1b[31mRED"));
+  CHECK_FALSE(has(r.err, "\x1b"));
+  CHECK_FALSE(has(r.err, "\x07"));
+  CHECK(yelan::cli::printable("a\rb\x7f\n") == "a\\x0db\\x7f\n");
+  // A corrupt weights file and an event file passed as weights: bad input (2) for run too.
+  std::ofstream(d / "junk.h5") << "not HDF5 at all";
+  const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
+  CHECK(cli({"run", "--weights", d / "junk.h5", D}).code == 2);
+  CHECK(cli({"run", "--weights", D, D}).code == 2);
+  CHECK(cli({"weights", "inspect", d / "junk.h5"}).code == 2);
 }

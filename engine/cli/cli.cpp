@@ -2,10 +2,14 @@
 
 #include <stdexcept>
 
+#include "camera/io/format_error.h"
 #include "engine/cli/args.h"
 #include "engine/cli/commands.h"
 #include "engine/threads.h"
+#include "engine/model_config.h"
 #include "kernels/cpu.h"
+#include "weights_tools/json.h"
+#include "weights_tools/weights_file.h"
 
 namespace yelan::cli {
 namespace {
@@ -112,18 +116,47 @@ int dispatch(const std::vector<std::string>& argv, std::ostream& out, std::ostre
 
 }  // namespace
 
+std::string printable(const std::string& text) {
+  static const char* hex = "0123456789abcdef";
+  std::string out;
+  for (const unsigned char c : text) {
+    if (c >= 0x20 && c != 0x7f) {
+      out += char(c);
+    } else if (c == '\n') {
+      out += "\n";  // multi-line messages keep their lines
+    } else {
+      out += "\\x";
+      out += hex[c >> 4];
+      out += hex[c & 15];
+    }
+  }
+  return out;
+}
+
 int run(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
+  // One mapping from error kind to exit code: bad usage or bad input (a malformed file,
+  // weights or config) is 2, anything else that failed at run time is 1. Messages may quote
+  // text from files: control characters are shown escaped, never sent to the terminal.
+  auto fail = [&](const std::exception& e, int code) {
+    err << "yelan: error: " << printable(e.what()) << "\n";
+    return code;
+  };
   try {
     return dispatch(argv, out, err);
   } catch (const UsageError& e) {
-    err << "yelan: error: " << e.what() << "\n";
-    return kUsageError;
+    return fail(e, kUsageError);
   } catch (const std::invalid_argument& e) {
-    err << "yelan: error: " << e.what() << "\n";
-    return kUsageError;
+    return fail(e, kUsageError);
+  } catch (const camera::FormatError& e) {
+    return fail(e, kUsageError);
+  } catch (const weights::WeightsError& e) {
+    return fail(e, kUsageError);
+  } catch (const weights::JsonError& e) {
+    return fail(e, kUsageError);
+  } catch (const ConfigError& e) {
+    return fail(e, kUsageError);
   } catch (const std::exception& e) {
-    err << "yelan: error: " << e.what() << "\n";
-    return kRuntimeError;
+    return fail(e, kRuntimeError);
   }
 }
 

@@ -12,6 +12,10 @@ enum ExitCode { kOk = 0, kRuntimeError = 1, kUsageError = 2 };
 
 int run(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err);
 
+// Text safe for a terminal: control characters (escape sequences, bells, carriage returns)
+// as \xNN; newlines kept.
+std::string printable(const std::string& text);
+
 // What `yelan --version` prints: version, ISA chosen, CPU features, library versions.
 std::string version_text();
 

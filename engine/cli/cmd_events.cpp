@@ -111,7 +111,7 @@ void print_warnings(std::ostream& err, const std::string& path, const camera::Ev
 }
 
 int format_error(std::ostream& err, const camera::FormatError& e) {
-  err << "yelan: error: " << e.what() << "\n";
+  err << "yelan: error: " << printable(e.what()) << "\n";
   return kUsageError;
 }
 

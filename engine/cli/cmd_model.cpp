@@ -245,14 +245,14 @@ int cmd_model(const std::vector<std::string>& argv, std::ostream& out, std::ostr
     if (argv[0] == "summary") return summary(Args("model summary", rest, {"--config"}, {"--json"}), out);
     if (argv[0] == "forward") return forward(Args("model forward", rest, {"--weights", "--input", "--output"}, {}), out);
   } catch (const ConfigError& e) {
-    err << "yelan: error: " << e.what() << "\n";
+    err << "yelan: error: " << printable(e.what()) << "\n";
     return kUsageError;
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
-    for (std::string line; std::getline(lines, line);) err << "yelan: error: " << line << "\n";
+    for (std::string line; std::getline(lines, line);) err << "yelan: error: " << printable(line) << "\n";
     return kUsageError;
   } catch (const camera::h5::H5Failure& e) {
-    err << "yelan: error: " << e.what() << "\n";
+    err << "yelan: error: " << printable(e.what()) << "\n";
     return kUsageError;
   }
   throw UsageError("unknown model subcommand '" + argv[0] + "' (summary, forward)");

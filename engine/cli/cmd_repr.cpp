@@ -18,6 +18,7 @@
 #include "camera/repr/tore.h"
 #include "camera/repr/volume_file.h"
 #include "engine/cli/args.h"
+#include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
 #include "engine/threads.h"
 
@@ -334,7 +335,7 @@ int cmd_repr(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   try {
     return run_repr(argv, out);
   } catch (const camera::FormatError& e) {
-    err << "yelan: error: " << e.what() << "\n";
+    err << "yelan: error: " << printable(e.what()) << "\n";
     return 2;
   }
 }

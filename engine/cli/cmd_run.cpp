@@ -145,7 +145,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   session.write_outputs(wall, err);
   session.report(in, wall, out);
   if (!stopped.empty()) {
-    err << "yelan: error: " << stopped << " (the " << session.poses() << " poses computed before are written)\n";
+    err << "yelan: error: " << printable(stopped) << " (the " << session.poses() << " poses computed before are written)\n";
     return kUsageError;
   }
   return kOk;

@@ -254,10 +254,10 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
-    for (std::string line; std::getline(lines, line);) err << "yelan: error: " << line << "\n";
+    for (std::string line; std::getline(lines, line);) err << "yelan: error: " << printable(line) << "\n";
     return kUsageError;
   } catch (const weights::JsonError& e) {
-    err << "yelan: error: config JSON: " << e.what() << "\n";
+    err << "yelan: error: config JSON: " << printable(e.what()) << "\n";
     return kUsageError;
   }
   throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine)");
