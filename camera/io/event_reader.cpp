@@ -28,6 +28,11 @@ void EventReader::check(std::size_t from) {
                                 std::to_string(info_.height) + " sensor (dropped)");
       continue;
     }
+    // Any two timestamps in +-2^60 us (36,000 years) differ by less than 2^61: time
+    // arithmetic downstream (durations, tick gaps) cannot overflow.
+    constexpr std::int64_t kMaxAbsT = std::int64_t(1) << 60;
+    if (e.t > kMaxAbsT || e.t < -kMaxAbsT)
+      throw FormatError(path_, where, "timestamp " + std::to_string(e.t) + " us is outside +-2^60 us");
     if (have_last_ && e.t < last_t_) {
       if (warnings_.backwards++ == 0)
         note_warning(where, "timestamp goes backwards from " + std::to_string(last_t_) + " to " +

@@ -283,3 +283,12 @@ TEST_CASE("fuzz finding: a .npy dtype field without its closing parenthesis", "[
   CHECK_THROWS_WITH(yelan::camera::open_event_file(dir.file("p.npy")),
                     dir.file("p.npy") + ": offset 10: malformed dtype field in the .npy header");
 }
+
+TEST_CASE("timestamps whose differences could overflow are refused, in every reader", "[io][bad]") {
+  ScratchDir dir("bigt");
+  const std::string path = dir.file("big.txt");
+  write_text(path, "-9000000000000 1 1 1\n9000000000000 2 2 0\n");  // seconds: +-9e18 us
+  CHECK_THROWS_WITH(read_all(path), Catch::Contains("is outside +-2^60 us"));
+  write_text(path, "1 1 1 1\n2 2 2 0\n");
+  CHECK(read_all(path).size() == 2);
+}
