@@ -253,3 +253,14 @@ TEST_CASE("text from files is shown escaped, and bad input is exit 2 for every c
   CHECK(cli({"run", "--weights", D, D}).code == 2);
   CHECK(cli({"weights", "inspect", d / "junk.h5"}).code == 2);
 }
+
+TEST_CASE("messages name the file and quote attributes whole", "[cli]") {
+  const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const Result w = cli({"run", "--weights", D, D});
+  CHECK(w.code == 2);
+  CHECK(has(w.err, "format is 'yelan-recording', expected 'yelan-weights'"));
+  const Result f = cli({"model", "forward", "--weights", M, "--input", "nope.h5", "--output", "/tmp/never.h5"});
+  CHECK(f.code == 2);
+  CHECK(has(f.err, "--input nope.h5: no such file"));
+}

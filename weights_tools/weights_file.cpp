@@ -55,9 +55,11 @@ std::optional<std::string> string_attr(hid_t loc, const std::string& name, const
   }
   const std::size_t n = H5Tget_size(type.get());
   if (n == 0 || n > (std::size_t(64) << 20)) bad(path, what + " has an absurd size");
-  std::string out(n, '\0');
+  // One byte more than stored: a NUL-terminated memory type keeps the last character of a
+  // NUL-padded string (written without a terminator) instead of cutting it.
+  std::string out(n + 1, '\0');
   Id mem = must(H5Tcopy(H5T_C_S1), path, "string type");
-  H5Tset_size(mem.get(), n);
+  H5Tset_size(mem.get(), n + 1);
   must(H5Aread(attr.get(), mem.get(), out.data()), path, "cannot read " + what);
   out.resize(std::find(out.begin(), out.end(), '\0') - out.begin());
   return out;

@@ -1,5 +1,6 @@
 // `yelan model summary|forward` and `yelan weights init`: the C++ networks from a config
 // or a weights file.
+#include <filesystem>
 #include <hdf5.h>
 #include <unistd.h>
 
@@ -195,7 +196,14 @@ int forward(const Args& a, std::ostream& out) {
   std::vector<float> input;
   std::vector<hsize_t> dims;
   {
-    h5::H5Id f = h5::open_file(*in);
+    if (!std::filesystem::is_regular_file(*in)) throw UsageError("--input " + *in + ": no such file");
+    h5::H5Id f = [&] {
+      try {
+        return h5::open_file(*in);
+      } catch (const std::exception& e) {
+        throw UsageError("--input " + *in + ": " + e.what());
+      }
+    }();
     if (!h5::exists(f.get(), "input")) throw UsageError(*in + ": no dataset 'input' (S x C x H x W float32)");
     h5::H5Id ds = h5::check(H5Dopen2(f.get(), "input", H5P_DEFAULT), *in + ": open input");
     dims = h5::shape(ds.get());
