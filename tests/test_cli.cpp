@@ -264,3 +264,51 @@ TEST_CASE("messages name the file and quote attributes whole", "[cli]") {
   CHECK(f.code == 2);
   CHECK(has(f.err, "--input nope.h5: no such file"));
 }
+
+TEST_CASE("Ctrl-C during run on a file writes every pose computed so far, and its pictures", "[cli]") {
+  yelan::test::CliTempDir d("run-signal");
+  const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::filesystem::create_directories(d / "viz");
+  const std::vector<std::string> args = {"run", "--weights", M, D, "--out", d / "p.csv", "--viz", d / "viz",
+                                         "--no-early-exit", "--threads", "1"};
+  const pid_t child = ::fork();
+  REQUIRE(child >= 0);
+  if (child == 0) {
+    std::vector<char*> argv = {const_cast<char*>(YELAN_BINARY)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::freopen("/dev/null", "w", stdout);
+    ::freopen("/dev/null", "w", stderr);
+    ::execv(YELAN_BINARY, argv.data());
+    ::_exit(127);
+  }
+  auto pngs = [&] {
+    int n = 0;
+    for (const auto& e : std::filesystem::directory_iterator(d.p / "viz")) n += e.path().extension() == ".png";
+    return n;
+  };
+  int status = 0;
+  bool finished = false;
+  for (int i = 0; i < 3000 && pngs() < 4; ++i) {
+    if (::waitpid(child, &status, WNOHANG) == child) {
+      finished = true;
+      break;
+    }
+    ::usleep(5000);
+  }
+  if (!finished) {
+    ::kill(child, SIGINT);
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    CHECK(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 1);
+  }
+  REQUIRE(std::filesystem::exists(d / "p.csv"));
+  std::istringstream csv(yelan::test::slurp(d / "p.csv"));
+  int rows = -1;  // the header
+  for (std::string l; std::getline(csv, l);) ++rows;
+  CHECK(rows >= 4);
+  CHECK(rows >= pngs() - 1);
+  for (const auto& e : std::filesystem::directory_iterator(d.p / "viz"))
+    CHECK(e.path().string().find(".tmp-") == std::string::npos);
+}

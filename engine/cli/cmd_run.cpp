@@ -127,7 +127,12 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   std::int64_t last_t = 0;
   std::string stopped;
   const auto start = std::chrono::steady_clock::now();
+  InterruptGuard guard;  // Ctrl-C / SIGTERM: stop reading, write every pose computed so far
   for (;;) {
+    if (InterruptGuard::interrupted()) {
+      stopped = "interrupted";
+      break;
+    }
     try {
       if (reader->read(ev, 1 << 15) == 0) break;
     } catch (const std::exception& e) {
@@ -144,6 +149,10 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   session.write_outputs(wall, err);
   session.report(in, wall, out);
+  if (stopped == "interrupted") {
+    err << "yelan: interrupted: the " << session.poses() << " poses computed so far are written\n";
+    return kRuntimeError;
+  }
   if (!stopped.empty()) {
     err << "yelan: error: " << printable(stopped) << " (the " << session.poses() << " poses computed before are written)\n";
     return kUsageError;
