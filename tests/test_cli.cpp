@@ -312,3 +312,15 @@ TEST_CASE("Ctrl-C during run on a file writes every pose computed so far, and it
   for (const auto& e : std::filesystem::directory_iterator(d.p / "viz"))
     CHECK(e.path().string().find(".tmp-") == std::string::npos);
 }
+
+TEST_CASE("every shipped model verifies against its config's manifest", "[cli]") {
+  const std::string models = std::string(YELAN_SOURCE_DIR) + "/models/";
+  for (const auto& [file, config] : {std::pair<std::string, std::string>{"default.h5", "small-pose0.125"},
+                                     {"default.h5", std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-pose0.125.json"},
+                                     {"small-first.h5", "small"}}) {
+    const Result r = cli({"weights", "verify", models + file, "--config", config});
+    INFO(file << " " << config << ": " << r.err);
+    CHECK(r.code == 0);
+    CHECK(has(r.out, "ok: "));
+  }
+}

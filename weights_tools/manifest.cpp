@@ -35,10 +35,11 @@ std::string read_text(const std::string& path) {
   return s.str();
 }
 
+// A name such as "small" or "small-pose0.125", not a path or a file name.
 bool is_config_name(const std::string& s) {
-  if (s.empty()) return false;
+  if (s.empty() || s.ends_with(".json")) return false;
   for (char c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) return false;
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.')) return false;
   return true;
 }
 
@@ -115,6 +116,9 @@ Manifest find_manifest(const std::string& name_or_path) {
   // A config file: its manifest sits beside it.
   fs::path beside = fs::path(p);
   beside.replace_extension(".manifest.json");
+  // Else the manifest make_manifest.py wrote for the config's stem in the config folder.
+  const fs::path named = fs::path(config_dir()) / (fs::path(p).stem().string() + ".manifest.json");
+  if (!fs::exists(beside, ec) && fs::exists(named, ec)) return read_manifest(named.string());
   if (!fs::exists(beside, ec))
     throw WeightsError(p + ": a config without a manifest (expected " + beside.string() +
                        "; run weights_tools/make_manifest.py " + p + ")");
