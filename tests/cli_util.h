@@ -2,6 +2,7 @@
 #pragma once
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -11,6 +12,19 @@
 #include "engine/cli/cli.h"
 
 namespace yelan::test {
+
+// The real binary started as a child process (its output to /dev/null), for tests that send
+// it signals; returns the child's pid.
+inline pid_t spawn(const std::string& binary, const std::vector<std::string>& args) {
+  const pid_t child = ::fork();
+  if (child != 0) return child;
+  std::vector<char*> argv = {const_cast<char*>(binary.c_str())};
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  if (!std::freopen("/dev/null", "w", stdout) || !std::freopen("/dev/null", "w", stderr)) ::_exit(126);
+  ::execv(binary.c_str(), argv.data());
+  ::_exit(127);
+}
 
 struct CliResult {
   int code;

@@ -200,15 +200,8 @@ TEST_CASE("Ctrl-C or SIGTERM during sim, convert or repr leaves no temporary fil
   for (const auto& cmd : commands)
     for (const int sig : {SIGINT, SIGTERM}) {
       INFO(cmd[0] << " signal " << sig);
-      const pid_t child = ::fork();
-      REQUIRE(child >= 0);
-      if (child == 0) {
-        std::vector<char*> argv = {const_cast<char*>(YELAN_BINARY)};
-        for (const auto& a : cmd) argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        ::execv(YELAN_BINARY, argv.data());
-        ::_exit(127);
-      }
+      const pid_t child = yelan::test::spawn(YELAN_BINARY, cmd);
+      REQUIRE(child > 0);
       // Wait until the temporary file exists (or the command finished: too fast to interrupt).
       auto temps = [&] {
         int n = 0;
@@ -272,17 +265,8 @@ TEST_CASE("Ctrl-C during run on a file writes every pose computed so far, and it
   std::filesystem::create_directories(d / "viz");
   const std::vector<std::string> args = {"run", "--weights", M, D, "--out", d / "p.csv", "--viz", d / "viz",
                                          "--no-early-exit", "--threads", "1"};
-  const pid_t child = ::fork();
-  REQUIRE(child >= 0);
-  if (child == 0) {
-    std::vector<char*> argv = {const_cast<char*>(YELAN_BINARY)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::freopen("/dev/null", "w", stdout);
-    ::freopen("/dev/null", "w", stderr);
-    ::execv(YELAN_BINARY, argv.data());
-    ::_exit(127);
-  }
+  const pid_t child = yelan::test::spawn(YELAN_BINARY, args);
+  REQUIRE(child > 0);
   auto pngs = [&] {
     int n = 0;
     for (const auto& e : std::filesystem::directory_iterator(d.p / "viz")) n += e.path().extension() == ".png";

@@ -261,16 +261,8 @@ TEST_CASE("train: SIGINT or SIGTERM writes a checkpoint at the step reached and 
                                            "ben-dance3-front-high-static", "--steps", "100000", "--batch", "1",
                                            "--epoch-steps", "100000", "--val-windows", "1", "-o", out, "--quiet",
                                            "--threads", "1"};
-    const pid_t child = ::fork();
-    REQUIRE(child >= 0);
-    if (child == 0) {
-      std::vector<char*> argv = {const_cast<char*>(YELAN_BINARY)};
-      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      ::freopen("/dev/null", "w", stderr);
-      ::execv(YELAN_BINARY, argv.data());
-      ::_exit(127);
-    }
+    const pid_t child = yelan::test::spawn(YELAN_BINARY, args);
+    REQUIRE(child > 0);
     auto rows = [&] {
       std::istringstream in(yelan::test::slurp(out + "/log.csv"));
       int n = 0;

@@ -40,6 +40,36 @@ const T& pick(Rng& r, const std::vector<T>& v) {
   return v[std::size_t(r.below(int(v.size())))];
 }
 
+// How a split draws its camera and scene (the draws' order is part of the dataset's
+// definition: member i's files depend on it).
+struct SceneDraw {
+  double yaw_jitter_deg, distance_lo, distance_hi, height_lo, height_hi;
+  double high_below, medium_below;  // lighting: high if u < high_below, medium if < medium_below
+  double dynamic_p, flicker_p, occluders_p;
+};
+
+void draw_scene(Rng& r, const SceneDraw& d, double duration_s, SimSpec& s) {
+  const View views[4] = {View::front, View::back, View::left, View::right};
+  s.scene.view = views[r.below(4)];
+  s.scene.yaw_deg = view_yaw_deg(s.scene.view) + r.uniform(-d.yaw_jitter_deg, d.yaw_jitter_deg);
+  s.scene.distance_mm = r.uniform(d.distance_lo, d.distance_hi);
+  s.scene.height_mm = r.uniform(d.height_lo, d.height_hi);
+  const double l = r.uniform();
+  s.scene.light = l < d.high_below ? LightLevel::high : l < d.medium_below ? LightLevel::medium : LightLevel::low;
+  s.scene.background = r.uniform() < d.dynamic_p ? SceneConfig::dynamic : SceneConfig::static_wall;
+  s.scene.flicker = r.uniform() < d.flicker_p;
+  s.scene.occluders = r.uniform() < d.occluders_p;
+  s.duration_s = duration_s;
+  s.seed = r.bits() & 0xffffffffffffull;
+}
+
+// "<view>-<light>-<bg>[-occluded][-flicker]"
+std::string scene_suffix(const SimSpec& s) {
+  return std::string(view_name(s.scene.view)) + "-" + light_name(s.scene.light) + "-" +
+         (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static") + (s.scene.occluders ? "-occluded" : "") +
+         (s.scene.flicker ? "-flicker" : "");
+}
+
 }  // namespace
 
 const std::vector<std::string>& dataset_characters(const std::string& split) {
@@ -82,23 +112,10 @@ SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, doub
   s.height_scale = r.uniform(0.94, 1.06);
   s.girth_scale = r.uniform(0.9, 1.12);
   if (r.uniform() < 0.3) s.clothing = Clothing(r.below(5));
-  const View views[4] = {View::front, View::back, View::left, View::right};
-  s.scene.view = views[r.below(4)];
-  s.scene.yaw_deg = view_yaw_deg(s.scene.view) + r.uniform(-25, 25);
-  s.scene.distance_mm = r.uniform(2800, 4600);
-  s.scene.height_mm = r.uniform(900, 1600);
-  const double l = r.uniform();
-  s.scene.light = l < 0.4 ? LightLevel::high : l < 0.75 ? LightLevel::medium : LightLevel::low;
-  s.scene.background = r.uniform() < 0.5 ? SceneConfig::dynamic : SceneConfig::static_wall;
-  s.scene.flicker = r.uniform() < 0.15;
-  s.scene.occluders = r.uniform() < 0.15;
-  s.duration_s = duration_s;
-  s.seed = r.bits() & 0xffffffffffffull;
+  draw_scene(r, {25, 2800, 4600, 900, 1600, 0.4, 0.75, 0.5, 0.15, 0.15}, duration_s, s);
   std::ostringstream name;
   name << split << "-" << std::setw(5) << std::setfill('0') << i << "-" << s.character << "-" << s.motion << "-"
-       << view_name(s.scene.view) << "-" << light_name(s.scene.light) << "-"
-       << (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static") << (s.scene.occluders ? "-occluded" : "")
-       << (s.scene.flicker ? "-flicker" : "");
+       << scene_suffix(s);
   s.name = name.str();
   return s;
 }
@@ -109,22 +126,9 @@ SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed
   SimSpec s;
   s.dancer = false;
   s.motion = "dance";  // moves nothing visible; keeps the sampling rate of a scene with motion
-  const View views[4] = {View::front, View::back, View::left, View::right};
-  s.scene.view = views[r.below(4)];
-  s.scene.yaw_deg = view_yaw_deg(s.scene.view) + r.uniform(-45, 45);
-  s.scene.distance_mm = r.uniform(2500, 5000);
-  s.scene.height_mm = r.uniform(800, 1800);
-  const double l = r.uniform();
-  s.scene.light = l < 0.34 ? LightLevel::high : l < 0.67 ? LightLevel::medium : LightLevel::low;
-  s.scene.background = r.uniform() < 0.7 ? SceneConfig::dynamic : SceneConfig::static_wall;
-  s.scene.flicker = r.uniform() < 0.5;
-  s.scene.occluders = r.uniform() < 0.3;
-  s.duration_s = duration_s;
-  s.seed = r.bits() & 0xffffffffffffull;
+  draw_scene(r, {45, 2500, 5000, 800, 1800, 0.34, 0.67, 0.7, 0.5, 0.3}, duration_s, s);
   std::ostringstream name;
-  name << split << "-empty-" << std::setw(5) << std::setfill('0') << i << "-" << view_name(s.scene.view) << "-"
-       << light_name(s.scene.light) << "-" << (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static")
-       << (s.scene.occluders ? "-occluded" : "") << (s.scene.flicker ? "-flicker" : "");
+  name << split << "-empty-" << std::setw(5) << std::setfill('0') << i << "-" << scene_suffix(s);
   s.name = name.str();
   return s;
 }
