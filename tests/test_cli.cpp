@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <hdf5.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -306,5 +308,21 @@ TEST_CASE("every shipped model verifies against its config's manifest", "[cli]")
     INFO(file << " " << config << ": " << r.err);
     CHECK(r.code == 0);
     CHECK(has(r.out, "ok: "));
+  }
+}
+
+TEST_CASE("the shipped models carry a checksum on their tensors", "[cli]") {
+  for (const char* m : {"default.h5", "small-first.h5"}) {
+    const std::string path = std::string(YELAN_SOURCE_DIR) + "/models/" + m;
+    INFO(path);
+    const hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    REQUIRE(f >= 0);
+    for (const char* t : {"/mask/down1.maxpool_conv.1.double_conv.0.weight", "/mask/down1.maxpool_conv.1.double_conv.1.bias"}) {
+      const hid_t ds = H5Dopen2(f, t, H5P_DEFAULT);
+      REQUIRE(ds >= 0);
+      CHECK(H5Aexists(ds, "fnv1a64") > 0);
+      H5Dclose(ds);
+    }
+    H5Fclose(f);
   }
 }

@@ -245,6 +245,21 @@ const TensorInfo* WeightsReader::find(const std::string& group, const std::strin
   return it != list.end() && it->name == name ? &*it : nullptr;
 }
 
+namespace {
+
+constexpr const char* kChecksumAttr = "fnv1a64";
+
+// FNV-1a over a tensor's float32 bytes (little-endian, as stored): each dataset carries it,
+// so a flipped byte is found on load instead of running silently.
+std::uint64_t tensor_checksum(const std::vector<float>& v) {
+  std::uint64_t h = 1469598103934665603ull;
+  const auto* b = reinterpret_cast<const unsigned char*>(v.data());
+  for (std::size_t i = 0; i < v.size() * sizeof(float); ++i) h = (h ^ b[i]) * 1099511628211ull;
+  return h;
+}
+
+}  // namespace
+
 std::vector<float> WeightsReader::read(const TensorInfo& t) const {
   const std::string where = "/" + t.group + "/" + t.name;
   std::vector<float> data(static_cast<std::size_t>(element_count(t.shape)));
@@ -253,6 +268,13 @@ std::vector<float> WeightsReader::read(const TensorInfo& t) const {
   if (!data.empty())
     must(H5Dread(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()), path_,
          "cannot read " + where + " (truncated or corrupt data)");
+  if (H5Aexists(ds.get(), kChecksumAttr) > 0) {  // files written before checksums have none
+    Id attr = must(H5Aopen(ds.get(), kChecksumAttr, H5P_DEFAULT), path_, "cannot open the checksum of " + where);
+    std::uint64_t stored = 0;
+    must(H5Aread(attr.get(), H5T_NATIVE_UINT64, &stored), path_, "cannot read the checksum of " + where);
+    if (stored != tensor_checksum(data))
+      bad(path_, "tensor " + where + ": checksum mismatch (its bytes changed since the file was written)");
+  }
   return data;
 }
 
@@ -279,8 +301,14 @@ void save_weights(const std::string& path, const Weights& w) {
         throw std::invalid_argument("weights tensor '" + g + "/" + name + "': bad name or " +
                                     std::to_string(t.data.size()) + " values for shape " + shape_text(t.shape));
   }
-  camera::TempFile tmp_file(path);
-  const std::string& tmp = tmp_file.path();
+  const auto tmp_file = [&] {
+    try {
+      return std::make_unique<camera::TempFile>(path);
+    } catch (const std::runtime_error& e) {
+      throw WeightsError(e.what());
+    }
+  }();
+  const std::string& tmp = tmp_file->path();
   {
     {
       Id fcpl = untimed(H5P_FILE_CREATE, tmp);
@@ -313,12 +341,21 @@ void save_weights(const std::string& path, const Weights& w) {
           if (!t.data.empty())
             must(H5Dwrite(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, t.data.data()), tmp,
                  "cannot write dataset " + g + "/" + name);
+          Id cspace = must(H5Screate(H5S_SCALAR), tmp, "dataspace");
+          Id cattr = must(H5Acreate2(ds.get(), kChecksumAttr, H5T_STD_U64LE, cspace.get(), H5P_DEFAULT, H5P_DEFAULT), tmp,
+                          "cannot write the checksum of " + g + "/" + name);
+          const std::uint64_t sum = tensor_checksum(t.data);
+          must(H5Awrite(cattr.get(), H5T_NATIVE_UINT64, &sum), tmp, "cannot write the checksum of " + g + "/" + name);
         }
       }
       must(H5Fflush(root, H5F_SCOPE_GLOBAL), tmp, "cannot flush");
     }
   }
-  tmp_file.commit();
+  try {
+    tmp_file->commit();
+  } catch (const std::runtime_error& e) {
+    throw WeightsError(e.what());
+  }
 }
 
 }  // namespace yelan::weights

@@ -192,3 +192,25 @@ TEST_CASE("weights file: overwritten bytes give an error or a readable file, nev
   }
   CHECK(refused > 0);  // the superblock at least is checked
 }
+
+TEST_CASE("weights file: every tensor carries a checksum; a flipped byte is found on load, naming the tensor", "[weights]") {
+  TempDir dir("checksum");
+  weights::save_weights(dir / "w.h5", test::sample_weights());
+  REQUIRE_NOTHROW(weights::load_weights(dir / "w.h5"));
+  // Where the bytes of /mask/fc.bias lie in the file (contiguous storage).
+  haddr_t offset = HADDR_UNDEF;
+  {
+    const hid_t f = H5Fopen((dir / "w.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    REQUIRE(f >= 0);
+    const hid_t ds = H5Dopen2(f, "/mask/fc.bias", H5P_DEFAULT);
+    REQUIRE(ds >= 0);
+    offset = H5Dget_offset(ds);
+    H5Dclose(ds);
+    H5Fclose(f);
+  }
+  REQUIRE(offset != HADDR_UNDEF);
+  std::string bytes = bytes_of(dir / "w.h5");
+  bytes[std::size_t(offset) + 1] = char(bytes[std::size_t(offset) + 1] ^ 0x10);
+  std::ofstream(dir / "w.h5", std::ios::binary | std::ios::trunc) << bytes;
+  CHECK_THROWS_WITH(weights::load_weights(dir / "w.h5"), Catch::Contains("tensor /mask/fc.bias: checksum mismatch"));
+}
