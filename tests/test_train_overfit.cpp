@@ -47,7 +47,12 @@ TEST_CASE("train: a small pose net overfits one short recording below 40 mm MPJP
   t.checkpoint_minutes = 1000;
   t.out_dir = (dir / "run").string();
   std::ostringstream log;
+  // One thread: ctest runs two tests at once on two cores, and OpenMP threads that outnumber
+  // the cores spin against each other (this test took 10 minutes that way, 1 alone).
+  const int saved = yelan::threads();
+  yelan::set_threads(1);
   const yelan::train::TrainResult r = yelan::train::train(t, log);
+  yelan::set_threads(saved);
   INFO(log.str());
   CHECK(r.steps == t.steps);
   CHECK(r.best_val < 40.0);  // mm: the pose stage keeps its best validation MPJPE

@@ -29,7 +29,7 @@ train() {
   local resume=()
   [ -f "$RUNS/$name/checkpoint.state" ] && resume=(--resume)
   "$Y" train --stage "$stage" --config "$CFG" --data "$DATA" -o "$RUNS/$name" --steps "$steps" --batch 8 \
-    --epoch-steps 250 --val-windows 48 --checkpoint-minutes 5 --threads 1 --quiet "${resume[@]}" "$@" \
+    --epoch-steps 250 --val-windows 48 --patience 1000 --checkpoint-minutes 5 --threads 1 --quiet "${resume[@]}" "$@" \
     > "$RUNS/$name.out" 2>&1
 }
 
