@@ -50,6 +50,21 @@ std::vector<float> mask_cells(const std::vector<std::uint8_t>& m, int sensor_w, 
 
 }  // namespace
 
+Pose13 predicted_pose_mm(const Batch& b, const std::vector<float>& joints_norm, int f) {
+  Pose13 pred;
+  for (int j = 0; j < kJoints; ++j) {
+    const float* q = &joints_norm[(std::size_t(f) * kJoints + j) * 3];
+    pred[j] = denormalise_joint({q[0], q[1], q[2]}, b.k, b.z_ref[std::size_t(f)]);
+  }
+  return pred;
+}
+
+std::array<std::uint8_t, kJoints> valid_joints(const Batch& b, int f) {
+  std::array<std::uint8_t, kJoints> valid;
+  std::copy_n(&b.valid_u8[std::size_t(f) * kJoints], kJoints, valid.begin());
+  return valid;
+}
+
 void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ) {
   if (used_ >= windows_) throw std::logic_error("batch is full");
   const int S = cfg_.window, d = cfg_.downscale, H = cfg_.height(), W = cfg_.width();

@@ -37,6 +37,11 @@ struct Batch {
   int frames = 0;
 };
 
+// Frame f of a batch: the network's normalised joints (frames x 13 x 3) denormalised with
+// the frame's true head depth (the paper protocol), and which joints count.
+Pose13 predicted_pose_mm(const Batch& b, const std::vector<float>& joints_norm, int f);
+std::array<std::uint8_t, kJoints> valid_joints(const Batch& b, int f);
+
 class BatchBuilder {
  public:
   BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source);

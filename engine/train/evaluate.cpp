@@ -73,13 +73,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
       pose.forward(b.input.act, cfg.window);
       const std::vector<float>& jn = pose.joints();
       for (int t = 0; t < cfg.window; ++t) {
-        Pose13 pred;
-        for (int j = 0; j < kJoints; ++j) {
-          const float* q = &jn[(std::size_t(t) * kJoints + j) * 3];
-          pred[j] = denormalise_joint({q[0], q[1], q[2]}, b.k, b.z_ref[std::size_t(t)]);
-        }
-        std::array<std::uint8_t, kJoints> valid;
-        std::copy_n(&b.valid_u8[std::size_t(t) * kJoints], kJoints, valid.begin());
+        const Pose13 pred = predicted_pose_mm(b, jn, t);
+        const auto valid = valid_joints(b, t);
         all.add(pred, b.truth_mm[std::size_t(t)], valid);
         for (const auto& [name, value] : conditions) cond[name][value].add(pred, b.truth_mm[std::size_t(t)], valid);
         const auto view = conditions.find("view");

@@ -371,16 +371,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         std::vector<layers::Floats> store;
         sum += hpe_loss(pose, cfg.stages, b.target.data(), b.valid.data(), dheat, store).total * nw;
         const std::vector<float>& jn = pose.joints();
-        for (int f = 0; f < b.frames; ++f) {
-          Pose13 pred;
-          for (int j = 0; j < kJoints; ++j) {
-            const float* q = &jn[(std::size_t(f) * kJoints + j) * 3];
-            pred[j] = denormalise_joint({q[0], q[1], q[2]}, b.k, b.z_ref[std::size_t(f)]);
-          }
-          std::array<std::uint8_t, kJoints> valid;
-          std::copy_n(&b.valid_u8[std::size_t(f) * kJoints], kJoints, valid.begin());
-          metrics.add(pred, b.truth_mm[std::size_t(f)], valid);
-        }
+        for (int f = 0; f < b.frames; ++f)
+          metrics.add(predicted_pose_mm(b, jn, f), b.truth_mm[std::size_t(f)], valid_joints(b, f));
       } else {
         mask.forward(b.input.act);
         layers::Floats dm(mask.masks().floats());
