@@ -2,45 +2,45 @@
 
 #include <fcntl.h>
 #include <signal.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
+#include <cstdint>
 #include <cstring>
+#include <random>
 #include <stdexcept>
 
 namespace yelan::camera {
 
 namespace {
 
-// A fixed table a signal handler can walk: a slot is in use while its flag is set.
+// A fixed table a signal handler can walk. A slot is claimed by one thread, and its path is
+// read by the handler only once live (set after the path is complete), so a half-copied path
+// is never unlinked.
 constexpr int kSlots = 256;
 constexpr std::size_t kPathMax = 4096;
-std::array<std::atomic<bool>, kSlots> g_used{};
+std::array<std::atomic<bool>, kSlots> g_claimed{}, g_live{};
 std::array<std::array<char, kPathMax>, kSlots> g_paths{};
 
 int register_path(const std::string& p) {
   if (p.size() >= kPathMax) return -1;
-  for (int i = 0; i < kSlots; ++i) {
+  for (std::size_t i = 0; i < kSlots; ++i) {
     bool expected = false;
-    if (g_used[std::size_t(i)].load() || !g_used[std::size_t(i)].compare_exchange_strong(expected, true)) continue;
-    std::memcpy(g_paths[std::size_t(i)].data(), p.c_str(), p.size() + 1);
-    return i;
+    if (g_claimed[i].load() || !g_claimed[i].compare_exchange_strong(expected, true)) continue;
+    std::memcpy(g_paths[i].data(), p.c_str(), p.size() + 1);
+    g_live[i].store(true);
+    return int(i);
   }
   return -1;  // more than kSlots at once: still written safely, only not removed on a signal
 }
 
 void unregister(int slot) {
-  if (slot >= 0) g_used[std::size_t(slot)].store(false);
-}
-
-mode_t file_mode() {
-  const mode_t mask = ::umask(0);  // read it (there is no other way) and put it back
-  ::umask(mask);
-  return 0666 & ~mask;
+  if (slot < 0) return;
+  g_live[std::size_t(slot)].store(false);
+  g_claimed[std::size_t(slot)].store(false);
 }
 
 void on_signal(int sig) {
@@ -49,16 +49,39 @@ void on_signal(int sig) {
   ::raise(sig);
 }
 
+// A random name the handler may remove even before the file exists: registering first and
+// creating second leaves no moment where a signal (delivered to any thread) finds a file of
+// ours missing from the registry. A name already taken is never opened (O_EXCL), and a
+// signal between registering and finding it taken removes only a name holding our pid.
+std::string random_suffix() {
+  static const char kAlphabet[] = "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
+  thread_local std::mt19937_64 rng{std::random_device{}() ^ (std::uint64_t(::getpid()) << 32)};
+  std::string s(8, 'x');
+  for (auto& c : s) c = kAlphabet[rng() % (sizeof kAlphabet - 1)];
+  return s;
+}
+
 }  // namespace
 
 TempFile::TempFile(std::string final_path) : final_(std::move(final_path)) {
-  std::string pattern = final_ + ".tmp-" + std::to_string(long(::getpid())) + "-XXXXXX";
-  const int fd = ::mkstemp(pattern.data());
-  if (fd < 0) throw std::runtime_error("cannot create a temporary file beside " + final_ + ": " + std::strerror(errno));
-  ::fchmod(fd, file_mode());  // mkstemp makes 0600; an output gets what any new file would
-  ::close(fd);
-  temp_ = pattern;
-  slot_ = register_path(temp_);
+  const std::string stem = final_ + ".tmp-" + std::to_string(long(::getpid())) + "-";
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    std::string name = stem + random_suffix();
+    const int slot = register_path(name);
+    // open's mode passes through the umask: an output gets what any new file would.
+    const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0666);
+    if (fd >= 0) {
+      ::close(fd);
+      temp_ = std::move(name);
+      slot_ = slot;
+      return;
+    }
+    const int err = errno;
+    unregister(slot);
+    if (err != EEXIST)
+      throw std::runtime_error("cannot create a temporary file beside " + final_ + ": " + std::strerror(err));
+  }
+  throw std::runtime_error("cannot create a temporary file beside " + final_ + ": 100 names taken");
 }
 
 TempFile::~TempFile() {
@@ -85,7 +108,7 @@ void write_file_atomically(const std::string& path, const std::string& text) {
 
 void remove_temp_files() {
   for (int i = 0; i < kSlots; ++i)
-    if (g_used[std::size_t(i)].load()) ::unlink(g_paths[std::size_t(i)].data());
+    if (g_live[std::size_t(i)].load()) ::unlink(g_paths[std::size_t(i)].data());
 }
 
 void remove_temp_files_on_signal() {
