@@ -85,6 +85,16 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.masked_input = get_bool_or(p, where + ".pose", "masked_input", true);
   c.crop_margin = p.contains("crop_margin") ? get_int(p, where + ".pose", "crop_margin") : 0;
   c.representation = i.contains("representation") ? get_str(i, where + ".input", "representation") : "tore";
+  if (d.contains("run")) {
+    const json& r = section(d, "run", where);
+    if (r.contains("beta")) c.run_beta = get_num(r, where + ".run", "beta");
+    if (r.contains("presence")) {
+      const json& pr = section(r, "presence", where + ".run");
+      c.presence_a = get_num(pr, where + ".run.presence", "a");
+      c.presence_b = get_num(pr, where + ".run.presence", "b");
+      c.presence_calibrated = true;
+    }
+  }
   const struct { bool ok; const char* msg; } checks[] = {
       {c.channels >= 1, "input.channels must be >= 1"},
       {c.downscale >= 1, "input.downscale must be >= 1"},
@@ -96,11 +106,30 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.representation == "tore" || c.representation == "counts", "input.representation must be tore or counts"},
       {c.representation != "tore" || c.channels % 2 == 0, "input.channels must be even for TORE (2K planes)"},
       {c.representation != "counts" || c.channels == 2, "input.channels must be 2 for counts (one per polarity)"},
+      {c.run_beta >= 0 && c.run_beta <= 1, "run.beta must be in 0..1"},
+      {std::isfinite(c.presence_a) && std::isfinite(c.presence_b) && c.presence_a >= 0,
+       "run.presence: a must be finite and >= 0, b finite"},
       {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},
   };
   for (const auto& ch : checks)
     if (!ch.ok) throw ConfigError(where + ": " + ch.msg);
   return c;
+}
+
+std::string with_run_setting(const std::string& text, const std::string& key, const std::string& value_json) {
+  nlohmann::ordered_json d, v;
+  try {
+    d = nlohmann::ordered_json::parse(text);
+    v = nlohmann::ordered_json::parse(value_json);
+  } catch (const json::parse_error& e) {
+    throw ConfigError(std::string("config: not valid JSON: ") + e.what());
+  }
+  if (!d.is_object()) throw ConfigError("config: expected a JSON object");
+  if (d.contains("run") && !d["run"].is_object()) throw ConfigError("config: 'run' is not an object");
+  d["run"][key] = v;
+  std::string out = d.dump() + "\n";
+  parse_model_config(out, "config with run." + key);
+  return out;
 }
 
 ModelConfig load_model_config(const std::string& name_or_path) {

@@ -27,6 +27,14 @@ struct ModelConfig {
   // input.representation: "tore" (2K = channels TORE planes) or "counts" (2 channels: events
   // of each polarity in the last frame period, log(1 + n); the constant-time-frame baseline)
   std::string representation = "tore";
+  // run (optional): how `yelan run` uses this model, chosen on validation data.
+  //   run.beta: the early-exit threshold it ships with.
+  //   run.presence {a, b}: P(person) = sigmoid(a * ln(s + 0.001) + b), s the share of the
+  //   frame the mask in use covers (fitted by `yelan calibrate`); absent, a fixed guess that
+  //   puts P = 0.5 near s = 1% (presence_calibrated false says so).
+  double run_beta = 0.99;
+  double presence_a = 3.0, presence_b = 13.8;
+  bool presence_calibrated = false;
   std::string json;  // the source text
 
   int height() const { return sensor_height / downscale; }
@@ -41,6 +49,10 @@ struct ModelConfig {
 
 // Throws ConfigError naming the source and the offending key.
 ModelConfig parse_model_config(const std::string& json_text, const std::string& where);
+// The config text with run.<key> set to the JSON value `value_json` (other keys kept in
+// their order); the result is checked by parse_model_config. Throws ConfigError.
+std::string with_run_setting(const std::string& json_text, const std::string& key, const std::string& value_json);
+
 // A name (weights_tools/configs/NAME.json under the source tree) or a path.
 ModelConfig load_model_config(const std::string& name_or_path);
 

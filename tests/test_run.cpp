@@ -2,6 +2,7 @@
 // a truncated file, bad arguments.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -38,12 +39,16 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   REQUIRE(r.code == 0);
   const auto rows = csv_rows(slurp(d / "p.csv"));
   REQUIRE(rows.size() >= 14);  // header + one pose per 20 ms tick of 0.3 s
-  CHECK(rows[0].size() == 1 + 39 + 2);
+  CHECK(rows[0].size() == 1 + 39 + 5);
   CHECK(rows[0][0] == "t_us");
   CHECK(rows[0][1] == "head_x");
+  CHECK(rows[0][40] == "confidence");
   CHECK(rows[0][41] == "mask_ran");
+  CHECK(rows[0][42] == "person");
+  CHECK(rows[0][43] == "pose_confidence");
+  CHECK(rows[0][44] == "mask_share");
   for (std::size_t i = 1; i < rows.size(); ++i) {
-    REQUIRE(rows[i].size() == 42);
+    REQUIRE(rows[i].size() == 45);
     CHECK(rows[i][41] == "1");  // no early exit: stage 1 at every tick
     if (i > 1) CHECK(std::stoll(rows[i][0]) - std::stoll(rows[i - 1][0]) == 20000);
   }
@@ -78,6 +83,61 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   CHECK_FALSE(contains(c0.out, "cropped to the mask's box"));
   CHECK(contains(cw.out, "cropped to the mask's box"));
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--crop-margin", "-3"}).code == 2);
+}
+
+TEST_CASE("run: presence is the calibrated probability of the mask's share, and no person writes no joints",
+          "[run][cli]") {
+  using yelan::run::presence_probability;
+  // P rises with the share, 0.5 where a * ln(s + 0.001) + b = 0.
+  CHECK(presence_probability(0, 3, 13.8) < presence_probability(0.01, 3, 13.8));
+  CHECK(presence_probability(0.01, 3, 13.8) < presence_probability(0.2, 3, 13.8));
+  CHECK(presence_probability(std::exp(-2.0) - 0.001, 1, 2) == Approx(0.5));
+  CHECK(presence_probability(0.3, 0, -50) < 1e-12);
+  // A model whose calibration says nobody, whatever the mask: empty joints in CSV, null in
+  // JSON, NaN in HDF5, person 0, the summary says so; the config's beta is the default.
+  yelan::test::CliTempDir d("run-presence");
+  std::ifstream micro(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
+  std::stringstream ss;
+  ss << micro.rdbuf();
+  std::string cfg = ss.str();
+  const auto brace = cfg.rfind('}');
+  for (const auto& [name, b] : std::vector<std::pair<std::string, std::string>>{{"nobody", "-30"}, {"always", "30"}}) {
+    std::ofstream(d / (name + ".json")) << cfg.substr(0, brace) << ", \"run\": {\"beta\": 0.25, \"presence\": {\"a\": 0, \"b\": " << b
+                                        << "}}}\n";
+    REQUIRE(run_cli({"weights", "init", "--config", d / (name + ".json"), "--seed", "2", "-o", d / (name + ".h5")}).code == 0);
+  }
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.2s", "-o", d / "r.yelan.h5"}).code == 0);
+  const auto none = run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "n.csv"});
+  INFO(none.err);
+  REQUIRE(none.code == 0);
+  CHECK(contains(none.out, "(beta 0.25)"));
+  CHECK(contains(none.out, "a person on 0.0% of the poses"));
+  const auto rows = csv_rows(slurp(d / "n.csv"));
+  REQUIRE(rows.size() >= 5);
+  for (std::size_t i = 1; i < rows.size(); ++i) {
+    REQUIRE(rows[i].size() == 45);
+    CHECK(rows[i][1].empty());
+    CHECK(rows[i][39].empty());
+    CHECK(std::stod(rows[i][40]) < 1e-6);
+    CHECK(rows[i][42] == "0");
+  }
+  REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "n.json"}).code == 0);
+  CHECK(contains(slurp(d / "n.json"), "\"joints_mm\": null"));
+  CHECK(contains(slurp(d / "n.json"), "\"person\": false"));
+  const auto all = run_cli({"run", "--weights", d / "always.h5", d / "r.yelan.h5", "--out", d / "a.csv", "--beta", "0.5"});
+  REQUIRE(all.code == 0);
+  CHECK(contains(all.out, "(beta 0.5)"));  // the flag wins over the config
+  CHECK(contains(all.out, "a person on 100.0% of the poses"));
+  const auto arows = csv_rows(slurp(d / "a.csv"));
+  for (std::size_t i = 1; i < arows.size(); ++i) {
+    CHECK_FALSE(arows[i][1].empty());
+    CHECK(arows[i][42] == "1");
+  }
+  // A calibration out of range is refused by the config's checks, naming the key.
+  std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"beta\": 1.5}}\n";
+  const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
+  CHECK(bad.code == 2);
+  CHECK(contains(bad.err, "run.beta must be in 0..1"));
 }
 
 #include "engine/run/viz.h"
@@ -248,4 +308,57 @@ TEST_CASE("run: the per-stage clocks stop before the poses are handed out (writi
     CHECK(ticks_timed[i] == i + 1);  // the old order recorded tick i's time after its pose: i
     CHECK(stage2_timed[i] == i + 1);
   }
+}
+
+#include <random>
+
+#include "engine/run/presence.h"
+
+TEST_CASE("run: presence calibration recovers a known logistic law and reports its reliability", "[run]") {
+  using namespace yelan::run;
+  // Shares drawn so that person ~ Bernoulli(sigmoid(2 ln(s + 0.001) + 6)).
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::vector<PresenceSample> s;
+  for (int i = 0; i < 20000; ++i) {
+    const double share = std::exp(-7 * u(rng));  // 0.0009 .. 1
+    s.push_back({share, u(rng) < presence_probability(share, 2, 6)});
+  }
+  // Balanced weighting shifts b by ln(n_neg / n_pos); a is unchanged.
+  double pos = 0;
+  for (const auto& x : s) pos += x.person;
+  const PresenceFit f = fit_presence(s);
+  CHECK(f.a == Approx(2).epsilon(0.1));
+  CHECK(f.b == Approx(6 + std::log((double(s.size()) - pos) / pos)).margin(0.3));
+  const PresenceReport r = presence_report(s, 2, 6, 0.5);
+  CHECK(r.person_ticks + r.empty_ticks == s.size());
+  CHECK(r.expected_calibration_error < 0.03);  // the true law is calibrated
+  CHECK(presence_report(s, 2, 20, 0.5).expected_calibration_error > 0.2);  // a shifted one is not
+  // Separable data gives finite numbers; one class alone is refused.
+  const PresenceFit sep = fit_presence({{0.0, false}, {0.001, false}, {0.1, true}, {0.3, true}});
+  CHECK(std::isfinite(sep.a));
+  CHECK(presence_probability(0.2, sep.a, sep.b) > 0.9);
+  CHECK(presence_probability(0.0, sep.a, sep.b) < 0.1);
+  CHECK_THROWS_WITH(fit_presence({{0.1, true}, {0.2, true}}), Catch::Contains("ticks with a person and ticks without"));
+}
+
+TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings and stores it in the config", "[run][cli]") {
+  yelan::test::CliTempDir d("calibrate");
+  REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
+  REQUIRE(run_cli({"sim", "--dataset", d / "ds", "--seed", "3", "--train", "0", "--val", "1", "--test", "0", "--train-empty",
+                   "0", "--val-empty", "1", "--duration", "0.5s", "--threads", "1"})
+              .code == 0);
+  const auto c = run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "c.h5", "--seconds",
+                          "0.3", "--skip", "0.1"});
+  INFO(c.err);
+  REQUIRE(c.code == 0);
+  CHECK(contains(c.out, "before (the uncalibrated default"));
+  CHECK(contains(c.out, "fitted: a "));
+  CHECK(contains(c.err, "(empty)"));
+  const auto info = run_cli({"weights", "inspect", d / "c.h5"});
+  CHECK(contains(info.out, "\"presence\""));
+  // The tensors are untouched; the output must differ from the input and not be it.
+  CHECK(run_cli({"weights", "diff", d / "w.h5", d / "c.h5"}).code == 0);
+  CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "w.h5"}).code == 2);
+  CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "-o", d / "x.h5"}).code == 2);
 }

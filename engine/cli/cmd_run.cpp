@@ -105,7 +105,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   }
   run::RunOptions& opt = setup.options;
   opt.rate_hz = a.number_or("--rate", 50, 0, 10000, true);
-  opt.beta = a.flag("--no-early-exit") ? 2.0 : a.number_or("--beta", 0.99, 0, 1);
+  opt.beta = a.flag("--no-early-exit") ? 2.0 : a.number_or("--beta", -1, 0, 1);  // -1: the model's
   opt.body_height_mm = a.number_or("--height-mm", 1700, 500, 2500);
   opt.fixed_depth_mm = a.number_or("--depth-mm", 0, 100, 100000);  // absent: the body-height prior
   opt.skip_empty = !a.flag("--keep-empty");

@@ -3,6 +3,9 @@
 // files differ beyond --tol, like diff(1).
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <optional>
 #include <cstdio>
 #include <set>
 #include <sstream>
@@ -10,6 +13,9 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/run_output.h"
+#include "engine/run/presence.h"
+#include "camera/sim/recording_windows.h"
 #include "weights_tools/json.h"
 #include "engine/model_config.h"
 #include "weights_tools/manifest.h"
@@ -240,6 +246,42 @@ int combine(const Args& a, std::ostream& out) {
   return kOk;
 }
 
+// Fits the presence calibration (and stores a beta) for `yelan run`, on the validation
+// recordings of a dataset: every tick through the deployed pipeline.
+int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
+  a.expect_positionals(0, 0);
+  const auto w = a.value("--weights"), data = a.value("--data"), o = a.value("-o");
+  if (!w || !data || !o) throw UsageError("weights calibrate needs --weights W --data DIR -o OUT.h5");
+  const double seconds = a.number_or("--seconds", 3, 0.1, 3600);
+  const double skip = a.number_or("--skip", 0.5, 0, 3600);
+  const double rate = a.number_or("--rate", 50, 1, 1000);
+  const std::optional<std::string> beta = a.value("--beta");
+  const double beta_v = a.number_or("--beta", 0.99, 0, 1);
+  check_output("-o", *o, {*w});
+  const std::filesystem::path val = std::filesystem::path(*data) / "val";
+  const std::string dir = std::filesystem::is_directory(val) ? val.string() : *data;
+  const std::vector<std::string> recs = camera::sim::list_recordings(dir);
+  err << "calibrating presence on " << recs.size() << " recordings in " << dir << " (" << seconds << " s each, the first "
+      << skip << " s left out)\n";
+  const auto samples = run::presence_samples(*w, recs, rate, seconds + skip, skip, err);
+  weights::Weights wt = weights::load_weights(*w);
+  const ModelConfig before = parse_model_config(wt.config_json, *w);
+  out << "before (" << (before.presence_calibrated ? "its calibration" : "the uncalibrated default") << ", a "
+      << before.presence_a << ", b " << before.presence_b << "):\n";
+  run::print_presence_report(run::presence_report(samples, before.presence_a, before.presence_b, 0.5), out);
+  const run::PresenceFit fit = run::fit_presence(samples);
+  out << std::defaultfloat << std::setprecision(6) << "fitted: a " << fit.a << ", b " << fit.b << " (balanced log-loss "
+      << fit.log_loss << "):\n";
+  run::print_presence_report(run::presence_report(samples, fit.a, fit.b, 0.5), out);
+  std::ostringstream pj;
+  pj << std::setprecision(9) << "{\"a\": " << fit.a << ", \"b\": " << fit.b << "}";
+  wt.config_json = with_run_setting(wt.config_json, "presence", pj.str());
+  if (beta) wt.config_json = with_run_setting(wt.config_json, "beta", std::to_string(beta_v));
+  weights::save_weights(*o, wt);
+  out << "wrote " << *o << " (config run.presence" << (beta ? " and run.beta" : "") << ")\n";
+  return kOk;
+}
+
 }  // namespace
 
 int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
@@ -251,6 +293,9 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "diff") return diff(Args("weights diff", rest, {"--tol"}, {"--all"}), out);
     if (sub == "verify") return verify(Args("weights verify", rest, {"--config"}, {}), out, err);
     if (sub == "init") return weights_init(rest, out);
+    if (sub == "calibrate")
+      return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta"}, {}),
+                       out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
@@ -260,7 +305,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     err << "yelan: error: config JSON: " << printable(e.what()) << "\n";
     return kUsageError;
   }
-  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine)");
+  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine, calibrate)");
 }
 
 }  // namespace yelan::cli

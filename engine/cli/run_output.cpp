@@ -7,8 +7,6 @@
 #include <cstring>
 
 #include <filesystem>
-
-#include <filesystem>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
@@ -38,7 +36,10 @@ void check_output(const std::string& flag, const std::string& path, const std::v
   const fs::path parent = fs::absolute(path, ec).parent_path();
   if (!fs::is_directory(parent, ec)) throw UsageError(flag + " " + path + ": no directory " + parent.string());
   // Root passes access(2) everywhere; creating (and removing) a probe file is the real test.
-  const std::string probe = (parent / ("." + fs::path(path).filename().string() + ".probe-" + std::to_string(::getpid()))).string();
+  std::string probe_name = ".";  // appended, not "." + ...: GCC 12 warns falsely on that (-Wrestrict)
+  probe_name += fs::path(path).filename().string();
+  probe_name += ".probe-" + std::to_string(::getpid());
+  const std::string probe = (parent / probe_name).string();
   const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW, 0600);
   if (fd < 0) throw UsageError(flag + " " + path + ": cannot write in " + parent.string() + " (" + std::strerror(errno) + ")");
   ::close(fd);
@@ -62,11 +63,18 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
     o << "[";
     for (std::size_t i = 0; i < poses.size(); ++i) {
       const auto& p = poses[i];
-      o << (i ? ",\n " : "\n ") << "{\"t_us\": " << p.t_us << ", \"joints_mm\": [";
-      for (int j = 0; j < 13; ++j)
-        o << (j ? ", " : "") << "[" << p.joints_mm[j][0] << ", " << p.joints_mm[j][1] << ", " << p.joints_mm[j][2] << "]";
-      o << "], \"confidence\": " << p.confidence << ", \"mask_ran\": " << (p.mask_ran ? 1 : 0)
-        << ", \"stale\": " << (p.stale ? "true" : "false") << "}";
+      o << (i ? ",\n " : "\n ") << "{\"t_us\": " << p.t_us << ", \"joints_mm\": ";
+      if (p.person) {
+        o << "[";
+        for (int j = 0; j < 13; ++j)
+          o << (j ? ", " : "") << "[" << p.joints_mm[j][0] << ", " << p.joints_mm[j][1] << ", " << p.joints_mm[j][2] << "]";
+        o << "]";
+      } else {
+        o << "null";  // no person: no joints
+      }
+      o << ", \"confidence\": " << p.confidence << ", \"person\": " << (p.person ? "true" : "false")
+        << ", \"pose_confidence\": " << p.pose_confidence << ", \"mask_share\": " << p.mask_share
+        << ", \"mask_ran\": " << (p.mask_ran ? 1 : 0) << ", \"stale\": " << (p.stale ? "true" : "false") << "}";
     }
     o << "\n]\n";
     if (!o.flush()) throw std::runtime_error("cannot write " + tmp.path());
@@ -80,19 +88,25 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
       if (!poses.empty()) h5::check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
     };
     std::vector<std::int64_t> t;
-    std::vector<float> j, c;
-    std::vector<std::uint8_t> m;
+    std::vector<float> j, c, pc, share;
+    std::vector<std::uint8_t> m, person;
     for (const auto& p : poses) {
       t.push_back(p.t_us);
       for (const auto& q : p.joints_mm) j.insert(j.end(), q.begin(), q.end());
       c.push_back(p.confidence);
       m.push_back(p.mask_ran);
+      person.push_back(p.person);
+      pc.push_back(p.pose_confidence);
+      share.push_back(p.mask_share);
     }
     const hsize_t n = poses.size();
     put("t_us", H5T_STD_I64LE, H5T_NATIVE_INT64, {n}, t.data());
     put("joints_mm", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n, 13, 3}, j.data());
     put("confidence", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n}, c.data());
     put("mask_ran", H5T_STD_U8LE, H5T_NATIVE_UINT8, {n}, m.data());
+    put("person", H5T_STD_U8LE, H5T_NATIVE_UINT8, {n}, person.data());  // joints_mm NaN where 0
+    put("pose_confidence", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n}, pc.data());
+    put("mask_share", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n}, share.data());
     f.reset();
   }
   tmp.commit();
@@ -162,6 +176,7 @@ void RunSession::write_outputs(double wall_s, std::ostream& err) {
       << ", \"p99_ms\": " << run::percentile(s.times.tick_ms, 0.99) << ", \"mask_run_fraction\": " << stage1_share()
       << ", \"threads\": " << yelan::threads() << ", \"config\": \"" << pipe_.config_name() << "\", \"poses\": " << s.poses
       << ", \"ticks\": " << s.ticks << ", \"stale_ticks\": " << s.stale
+      << ", \"person_share\": " << (s.poses ? double(s.person_poses) / double(s.poses) : 0.0)
       << ", \"crop_share\": " << run::crop_share(s)
       << ", \"early_exit_saved_ms\": " << run::early_exit_saved_ms(s) << ", \"early_exit_saved_share\": " << saved_share()
       << "}\n";
@@ -183,7 +198,8 @@ void RunSession::report(const std::string& source, double wall_s, std::ostream& 
       << " per second (" << (pipe_.causal() ? "causal" : "windowed bidirectional") << ", config " << pipe_.config_name()
       << "), " << std::fixed << std::setprecision(1) << double(s.poses) / wall_s
       << " poses/s on this machine; stage 1 ran on " << 100 * stage1_share() << "% of the ticks with events (beta "
-      << std::setprecision(3) << setup_.options.beta << "), " << s.stale << " ticks without events repeated the last pose\n"
+      << std::defaultfloat << std::setprecision(3) << pipe_.beta() << std::fixed << std::setprecision(1) << "), " << s.stale
+      << " ticks without events repeated the last pose; a person on " << (s.poses ? 100.0 * double(s.person_poses) / double(s.poses) : 0.0) << "% of the poses\n"
       << "per tick ms p50/p99: TORE " << p50_p99(t.tore_ms) << ", stage 1 " << p50_p99(t.stage1_ms) << ", stage 2 "
       << p50_p99(t.stage2_ms) << ", whole tick " << p50_p99(t.tick_ms) << "\n";
   if (s.mask_runs)

@@ -79,6 +79,9 @@ struct PosePipeline::Impl {
   int slot = 0;
   std::vector<std::int64_t> slot_t;
   std::vector<bool> slot_mask_ran;
+  std::vector<float> slot_share;
+  std::vector<float> shares;  // each stored mask's share of the frame
+  double beta = 0.99;
   Pose last;
   bool have_last = false;
   RunStats stats;
@@ -103,6 +106,8 @@ struct PosePipeline::Impl {
     else nets.pose.set_streaming(true);
     slot_t.resize(std::size_t(cfg.window));
     slot_mask_ran.resize(std::size_t(cfg.window));
+    slot_share.resize(std::size_t(cfg.window));
+    beta = o.beta >= 0 ? o.beta : cfg.run_beta;
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
   }
@@ -136,6 +141,7 @@ struct PosePipeline::Impl {
       p.t_us = slot_t[std::size_t(f)];
       p.mask_ran = slot_mask_ran[std::size_t(f)];
       p.head_depth_mm = z;
+      set_presence(p, slot_share[std::size_t(f)]);
       double conf = 0;
       for (int j = 0; j < 13; ++j) {
         for (int c = 0; c < 3; ++c) p.joints_mm[std::size_t(j)][std::size_t(c)] = float(unit[std::size_t(j)][std::size_t(c)] * z);
@@ -144,12 +150,22 @@ struct PosePipeline::Impl {
         for (std::size_t i = 0; i < xy.pixels(); ++i) peak = std::max(peak, hm[i * 16]);
         conf += peak;
       }
-      p.confidence = float(conf / 13);
+      p.pose_confidence = float(conf / 13);
+      if (!p.person)
+        for (auto& jt : p.joints_mm) jt.fill(std::numeric_limits<float>::quiet_NaN());
       last = p;
       have_last = true;
       ++stats.poses;
+      stats.person_poses += p.person;
       out(p);
     }
+  }
+
+  void set_presence(Pose& p, float share) const {
+    const ModelConfig& cfg = nets.cfg;
+    p.mask_share = share;
+    p.confidence = cfg.masked_input ? float(presence_probability(share, cfg.presence_a, cfg.presence_b)) : 1.0f;
+    p.person = p.confidence >= opt.presence_threshold;
   }
 
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
@@ -184,6 +200,7 @@ struct PosePipeline::Impl {
       p.mask_ran = false;
       ++stats.stale;
       ++stats.poses;
+      stats.person_poses += p.person;
       out(p);
       return;
     }
@@ -196,7 +213,7 @@ struct PosePipeline::Impl {
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
     t0 = Clock::now();
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
-    const bool run_mask = cfg.masked_input && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < opt.beta);
+    const bool run_mask = cfg.masked_input && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta);
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);
@@ -205,7 +222,12 @@ struct PosePipeline::Impl {
       for (int c = 0; c < cfg.n_masks; ++c) input::mask_cut(m, 0, c, masks[std::size_t(c)]);
       scores = nets.mask.scores();
       boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
-      for (int c = 0; c < cfg.n_masks; ++c) boxes[std::size_t(c)] = bounding_box(masks[std::size_t(c)], m.w, m.h);
+      shares.assign(std::size_t(cfg.n_masks), 0.0f);
+      for (int c = 0; c < cfg.n_masks; ++c) {
+        const auto& mc = masks[std::size_t(c)];
+        boxes[std::size_t(c)] = bounding_box(mc, m.w, m.h);
+        shares[std::size_t(c)] = float(std::count_if(mc.begin(), mc.end(), [](float v) { return v != 0; })) / float(mc.size());
+      }
       mask_t = T;
       have_masks = true;
       use = 0;
@@ -224,6 +246,7 @@ struct PosePipeline::Impl {
     last_in = {dst.data + std::size_t(n) * per_frame, 1, dst.c, dst.h, dst.w};
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;
+    slot_share[std::size_t(slot)] = cfg.masked_input ? shares[std::size_t(use)] : 1.0f;
     const PoseNet::CropBox box = cfg.masked_input ? grown(boxes[std::size_t(use)]) : PoseNet::CropBox{};
     int ready = 0;
     if (!cfg.bidirectional) {
@@ -231,6 +254,7 @@ struct PosePipeline::Impl {
       run_stage2(frame.act, 1, box);
       slot_t[0] = T;
       slot_mask_ran[0] = run_mask;
+      slot_share[0] = slot_share[std::size_t(slot)];
       slot = (slot + 1) % cfg.window;
       ready = 1;
     } else {
@@ -305,6 +329,12 @@ void PosePipeline::finish(std::int64_t t_us, const std::function<void(const Pose
 
 const RunStats& PosePipeline::stats() const { return impl_->stats; }
 std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
+double PosePipeline::beta() const { return impl_->beta; }
+
+double presence_probability(double share, double a, double b) {
+  const double z = a * std::log(std::max(0.0, share) + 0.001) + b;
+  return 1 / (1 + std::exp(-z));
+}
 const std::vector<float>& PosePipeline::last_tore() const { return impl_->vol; }
 const std::vector<float>& PosePipeline::last_mask() const {
   static const std::vector<float> none;
@@ -336,7 +366,7 @@ std::string pose_csv_header() {
   std::string h = "t_us";
   for (const char* n : names)
     for (const char* c : {"x", "y", "z"}) h += std::string(",") + n + "_" + c;
-  return h + ",confidence,mask_ran";
+  return h + ",confidence,mask_ran,person,pose_confidence,mask_share";
 }
 
 std::string pose_csv_row(const Pose& p) {
@@ -344,9 +374,13 @@ std::string pose_csv_row(const Pose& p) {
   o.setf(std::ios::fixed);
   o.precision(1);
   o << p.t_us;
-  for (const auto& j : p.joints_mm) o << "," << j[0] << "," << j[1] << "," << j[2];
+  for (const auto& j : p.joints_mm) {
+    if (p.person) o << "," << j[0] << "," << j[1] << "," << j[2];
+    else o << ",,,";
+  }
   o.precision(4);
-  o << "," << p.confidence << "," << (p.mask_ran ? 1 : 0);
+  o << "," << p.confidence << "," << (p.mask_ran ? 1 : 0) << "," << (p.person ? 1 : 0) << "," << p.pose_confidence << ","
+    << p.mask_share;
   return o.str();
 }
 

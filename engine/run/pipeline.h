@@ -23,7 +23,9 @@ namespace yelan::run {
 
 struct RunOptions {
   double rate_hz = 50;        // poses per second
-  double beta = 0.99;         // early-exit threshold on the mask scores; > 1 runs stage 1 every tick
+  double beta = -1;           // early-exit threshold on the mask scores; > 1 runs stage 1 every
+                              // tick; < 0: the model's (its config's run.beta, else 0.99)
+  double presence_threshold = 0.5;  // P(person) at or above which a tick has a person
   double body_height_mm = 1700;  // the depth prior
   double fixed_depth_mm = 0;  // > 0: use this head depth instead of the prior
   bool skip_empty = true;     // no events since the last tick: repeat the last pose
@@ -34,10 +36,16 @@ struct RunOptions {
   std::optional<std::int64_t> tick_origin_us;
 };
 
+// A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
+// through the model's calibration (ModelConfig run.presence) to a probability. A model
+// without stage 1 (pose.masked_input false) has no opinion: presence 1 on every tick.
 struct Pose {
   std::int64_t t_us = 0;
-  std::array<std::array<float, 3>, 13> joints_mm{};  // camera frame
-  float confidence = 0;       // mean over joints of the last stage's xy peak probability
+  std::array<std::array<float, 3>, 13> joints_mm{};  // camera frame; NaN when !person
+  float confidence = 1;       // P(a person is there), calibrated
+  bool person = true;         // confidence >= RunOptions::presence_threshold
+  float mask_share = 0;       // the mask's share of the frame (what confidence is computed from)
+  float pose_confidence = 0;  // mean over joints of the last stage's xy peak probability
   bool mask_ran = false, stale = false;
   double head_depth_mm = 0;
 };
@@ -48,6 +56,7 @@ struct StageTimes {
 
 struct RunStats {
   std::uint64_t ticks = 0, mask_runs = 0, stale = 0, events = 0, poses = 0;
+  std::uint64_t person_poses = 0;  // poses with a person
   std::uint64_t gap_ticks = 0;  // skipped over gaps of more than 2 s without events
   double crop_area = 0;         // sum over stage-2 runs of the head's share of the frame
   std::uint64_t crop_runs = 0;  // stage-2 runs with cropping on
@@ -72,6 +81,7 @@ class PosePipeline {
   void finish(std::int64_t t_us, const std::function<void(const Pose&)>& out);
   const RunStats& stats() const;
   std::string config_name() const;
+  double beta() const;  // the early-exit threshold in use
   bool causal() const;
   // For pictures, valid inside the pose callback: the TORE volume of the latest tick (2K x
   // H x W at the sensor's size), the mask in use (the model's input size) and its downscale.
@@ -94,7 +104,11 @@ double head_depth_from_height(const std::array<std::array<double, 3>, 13>& joint
 // The q-quantile (0..1) of per-tick times, nearest rank; 0 for none.
 double percentile(std::vector<double> v, double q);
 
-// CSV: t_us, then x,y,z (mm) of the 13 joints in SPEC order, confidence, mask_ran.
+// P(person) for a mask covering `share` of the frame, by the model's calibration.
+double presence_probability(double share, double a, double b);
+
+// CSV: t_us, then x,y,z (mm) of the 13 joints in SPEC order (empty when no person),
+// confidence (P(person)), mask_ran, person (0/1), pose_confidence, mask_share.
 std::string pose_csv_header();
 std::string pose_csv_row(const Pose& p);
 

@@ -44,6 +44,47 @@ RunViz::RunViz(const std::string& target, int w, int h, int every, double fps)
   std::filesystem::create_directories(dir_);
 }
 
+namespace {
+
+// A 5x7 bitmap font for the verdict line ("PERSON 0.97", "NO PERSON 0.03"): rows top down,
+// bit 4 the leftmost pixel.
+struct Glyph {
+  char c;
+  std::uint8_t rows[7];
+};
+constexpr Glyph kFont[] = {
+    {'N', {17, 25, 21, 19, 17, 17, 17}}, {'O', {14, 17, 17, 17, 17, 17, 14}}, {'P', {30, 17, 17, 30, 16, 16, 16}},
+    {'E', {31, 16, 16, 30, 16, 16, 31}}, {'R', {30, 17, 17, 30, 20, 18, 17}}, {'S', {15, 16, 16, 14, 1, 1, 30}},
+    {'0', {14, 17, 19, 21, 25, 17, 14}}, {'1', {4, 12, 4, 4, 4, 4, 14}},     {'2', {14, 17, 1, 2, 4, 8, 31}},
+    {'3', {30, 1, 1, 14, 1, 1, 30}},     {'4', {2, 6, 10, 18, 31, 2, 2}},     {'5', {31, 16, 30, 1, 1, 17, 14}},
+    {'6', {6, 8, 16, 30, 17, 17, 14}},   {'7', {31, 1, 2, 4, 8, 8, 8}},       {'8', {14, 17, 17, 14, 17, 17, 14}},
+    {'9', {14, 17, 17, 15, 1, 2, 12}},   {'.', {0, 0, 0, 0, 0, 12, 12}},
+};
+
+// `text` at (x0, y0), each font pixel `scale` x `scale`, in `rgb`; characters not in the
+// font are spaces.
+void draw_text(std::vector<std::uint8_t>& img, int w, int h, int x0, int y0, const std::string& text, int scale,
+               const std::uint8_t rgb[3]) {
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const Glyph* g = nullptr;
+    for (const Glyph& f : kFont)
+      if (f.c == text[k]) g = &f;
+    if (!g) continue;
+    for (int r = 0; r < 7; ++r)
+      for (int c = 0; c < 5; ++c) {
+        if (!(g->rows[r] >> (4 - c) & 1)) continue;
+        for (int dy = 0; dy < scale; ++dy)
+          for (int dx = 0; dx < scale; ++dx) {
+            const int x = x0 + (int(k) * 6 + c) * scale + dx, y = y0 + r * scale + dy;
+            if (x < 0 || y < 0 || x >= w || y >= h) continue;
+            std::copy_n(rgb, 3, &img[(std::size_t(y) * w + x) * 3]);
+          }
+      }
+  }
+}
+
+}  // namespace
+
 void RunViz::add(const Pose& p, const PosePipeline& pipe) {
   if (seen_++ % every_) return;
   const int W = 3 * w_;
@@ -67,7 +108,11 @@ void RunViz::add(const Pose& p, const PosePipeline& pipe) {
   camera::sim::Label l;
   for (int j = 0; j < 13; ++j) l.joints_mm[j] = {p.joints_mm[j][0], p.joints_mm[j][1], p.joints_mm[j][2]};
   std::vector<std::uint8_t> skel = panel;
-  camera::sim::draw_skeleton(skel, w_, h_, cam, l);
+  if (p.person) camera::sim::draw_skeleton(skel, w_, h_, cam, l);
+  char verdict[32];
+  std::snprintf(verdict, sizeof verdict, "%s %.2f", p.person ? "PERSON" : "NO PERSON", double(p.confidence));
+  static constexpr std::uint8_t kYes[3] = {120, 255, 120}, kNo[3] = {255, 200, 60};
+  draw_text(skel, w_, h_, 4, 4, verdict, 2, p.person ? kYes : kNo);
   // Side view: depth (z) across, height (y) down, centred on the hips, 10 mm per pixel.
   std::vector<std::uint8_t> side(std::size_t(w_) * h_ * 3, 24);
   camera::sim::Label s = l;
@@ -75,7 +120,7 @@ void RunViz::add(const Pose& p, const PosePipeline& pipe) {
   for (int j = 0; j < 13; ++j) s.joints_mm[j] = {(p.joints_mm[j][2] - zc) / 5.0, (p.joints_mm[j][1] - yc) / 5.0, 2.0};
   camera::sim::CameraModel ortho = cam;
   ortho.fx = ortho.fy = 1;  // with z = 2 above: 1 px per 10 mm
-  camera::sim::draw_skeleton(side, w_, h_, ortho, s);
+  if (p.person) camera::sim::draw_skeleton(side, w_, h_, ortho, s);
   for (int y = 0; y < h_; ++y) {
     std::copy_n(&panel[std::size_t(y) * w_ * 3], w_ * 3, &rgb[std::size_t(y) * W * 3]);
     std::copy_n(&skel[std::size_t(y) * w_ * 3], w_ * 3, &rgb[(std::size_t(y) * W + w_) * 3]);

@@ -1,6 +1,7 @@
 """Model configurations: the JSON files in weights_tools/configs/ (stored verbatim in the
 root attribute `config` of a weights file)."""
 import json
+import math
 import os
 from dataclasses import dataclass
 
@@ -110,7 +111,21 @@ def config_from_dict(d, where="config"):
         crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
         representation=_get(i, where + ".input", "representation", str, "tore"),
     )
+    # run (optional): how `yelan run` uses the model (beta, presence calibration); checked
+    # here as in engine/model_config.cpp, used only by the C++ runtime.
+    run = d.get("run", {})
+    if not isinstance(run, dict):
+        raise ConfigError(f"{where}: missing object 'run'")
+    beta = _get(run, where + ".run", "beta", float, 0.99)
+    pa, pb = 3.0, 13.8
+    if "presence" in run:
+        if not isinstance(run["presence"], dict):
+            raise ConfigError(f"{where}.run: missing object 'presence'")
+        pa = _get(run["presence"], where + ".run.presence", "a", float)
+        pb = _get(run["presence"], where + ".run.presence", "b", float)
     checks = [
+        (0 <= beta <= 1, "run.beta must be in 0..1"),
+        (math.isfinite(pa) and math.isfinite(pb) and pa >= 0, "run.presence: a must be finite and >= 0, b finite"),
         (cfg.channels >= 1, "input.channels must be >= 1"),
         (cfg.downscale >= 1, "input.downscale must be >= 1"),
         (cfg.window >= 1, "input.window must be >= 1"),

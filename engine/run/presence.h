@@ -1,0 +1,52 @@
+// Calibrating presence: `yelan run`'s P(person) is a logistic function of ln(s + 0.001), s
+// the share of the frame the mask in use covers. Its two numbers are fitted here on ticks of
+// labelled recordings (scenes with a dancer and empty ones) run through the deployed
+// pipeline, and stored in the model's config (run.presence).
+#pragma once
+#include <cstdint>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace yelan::run {
+
+struct PresenceSample {
+  double share = 0;    // the mask's share of the frame on this tick
+  bool person = false;  // the truth: the recording has a dancer
+};
+
+struct PresenceFit {
+  double a = 0, b = 0;
+  double log_loss = 0;  // class-balanced mean negative log-likelihood at the fit
+};
+
+// Logistic regression of person on ln(share + 0.001), both classes weighted equally (a
+// dataset's share of empty scenes says nothing of how often a stage is empty), Newton's
+// method with a little ridge so that separable data still gives finite numbers. a is kept
+// >= 0 (more mask never means less person). Throws std::invalid_argument without both classes.
+PresenceFit fit_presence(const std::vector<PresenceSample>& samples);
+
+struct PresenceReport {
+  std::uint64_t person_ticks = 0, empty_ticks = 0;
+  double hit_rate = 0;          // share of person ticks called person
+  double false_alarm_rate = 0;  // share of empty ticks called person
+  // Reliability: per bin of predicted P (10 bins), ticks, mean predicted P and the share
+  // that truly had a person.
+  struct Bin {
+    std::uint64_t n = 0;
+    double predicted = 0, observed = 0;
+  };
+  std::vector<Bin> bins;
+  double expected_calibration_error = 0;  // tick-weighted mean |predicted - observed|
+};
+
+PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold);
+void print_presence_report(const PresenceReport& r, std::ostream& out);
+
+// Ticks of the recordings (*.yelan.h5, dancer or empty scenes) run through the pipeline as
+// `yelan run` does (ticks at `rate_hz` from time 0, its early exit), at most `seconds` of
+// each; the first `skip_s` (the TORE still filling) are left out.
+std::vector<PresenceSample> presence_samples(const std::string& weights, const std::vector<std::string>& recordings,
+                                             double rate_hz, double seconds, double skip_s, std::ostream& progress);
+
+}  // namespace yelan::run
