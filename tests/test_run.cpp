@@ -339,6 +339,16 @@ TEST_CASE("run: presence calibration recovers a known logistic law and reports i
   CHECK(std::isfinite(sep.a));
   CHECK(presence_probability(0.2, sep.a, sep.b) > 0.9);
   CHECK(presence_probability(0.0, sep.a, sep.b) < 0.1);
+  // Classes that overlap where the mask is empty (a mask net that misses some dancers): the
+  // fit stays finite and beats the constant (log 2 balanced), where plain Newton ran away.
+  std::vector<PresenceSample> mixed;
+  for (int i = 0; i < 500; ++i) mixed.push_back({i % 2 ? 0.0 : 0.1, true});
+  for (int i = 0; i < 200; ++i) mixed.push_back({i % 10 ? 0.0 : 0.05, false});
+  const PresenceFit m = fit_presence(mixed);
+  CHECK(std::isfinite(m.a));
+  CHECK(std::isfinite(m.b));
+  CHECK(std::abs(m.b) < 1e3);
+  CHECK(m.log_loss < std::log(2.0) - 0.05);
   CHECK_THROWS_WITH(fit_presence({{0.1, true}, {0.2, true}}), Catch::Contains("ticks with a person and ticks without"));
 }
 

@@ -25,9 +25,17 @@ PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
     throw std::invalid_argument("presence calibration needs ticks with a person and ticks without (got " +
                                 std::to_string(std::uint64_t(n_pos)) + " and " + std::to_string(std::uint64_t(n_neg)) + ")");
   const double w_pos = 0.5 / n_pos, w_neg = 0.5 / n_neg, ridge = 1e-4;
-  double a = 1, b = 0;
-  for (int it = 0; it < 100; ++it) {
-    // Gradient and Hessian of the weighted log-loss (+ ridge on a) in (a, b).
+  // The weighted log-loss plus the ridge, computed stably (log1p of exp of the margin).
+  const auto loss = [&](double a, double b) {
+    double l = 0.5 * ridge * a * a;
+    for (const auto& s : samples) {
+      const double z = a * feature(s.share) + b, m = s.person ? z : -z;  // -log sigmoid(m)
+      l += (s.person ? w_pos : w_neg) * (m > 0 ? std::log1p(std::exp(-m)) : -m + std::log1p(std::exp(m)));
+    }
+    return l;
+  };
+  double a = 1, b = 0, cur = loss(a, b);
+  for (int it = 0; it < 200; ++it) {
     double ga = ridge * a, gb = 0, haa = ridge, hab = 0, hbb = 1e-9;
     for (const auto& s : samples) {
       const double x = feature(s.share), p = sigmoid(a * x + b), w = s.person ? w_pos : w_neg;
@@ -36,17 +44,22 @@ PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
       haa += h * x * x, hab += h * x, hbb += h;
     }
     const double det = haa * hbb - hab * hab;
-    if (!(std::abs(det) > 1e-300)) break;
-    const double da = (hbb * ga - hab * gb) / det, db = (haa * gb - hab * ga) / det;
-    a -= da, b -= db;
-    if (a < 0) a = 0;  // more mask never means less person
-    if (std::abs(da) + std::abs(db) < 1e-10) break;
+    double da = ga, db = gb;  // the gradient, where the Hessian is singular
+    if (std::abs(det) > 1e-300) da = (hbb * ga - hab * gb) / det, db = (haa * gb - hab * ga) / det;
+    // Newton's step, halved until the loss falls (plain Newton overshoots from a poor start).
+    bool moved = false;
+    for (double t = 1; t > 1e-8; t *= 0.5) {
+      const double na = std::max(0.0, a - t * da), nb = b - t * db, l = loss(na, nb);  // more mask never means less person
+      if (l < cur) {
+        moved = cur - l > 1e-13;
+        a = na, b = nb, cur = l;
+        break;
+      }
+    }
+    if (!moved) break;
   }
   PresenceFit f{a, b, 0};
-  for (const auto& s : samples) {
-    const double p = std::clamp(sigmoid(a * feature(s.share) + b), 1e-12, 1 - 1e-12);
-    f.log_loss -= (s.person ? w_pos * std::log(p) : w_neg * std::log(1 - p));
-  }
+  f.log_loss = cur - 0.5 * ridge * a * a;
   return f;
 }
 
@@ -54,26 +67,32 @@ PresenceReport presence_report(const std::vector<PresenceSample>& samples, doubl
   PresenceReport r;
   r.bins.resize(10);
   std::uint64_t hits = 0, alarms = 0;
+  for (const auto& s : samples) (s.person ? r.person_ticks : r.empty_ticks) += 1;
+  // Each class weighs half, as in the fit: the probability is calibrated for a stage where
+  // a person is there half of the time, whatever the dataset's share of empty scenes.
+  const double w_pos = r.person_ticks ? 0.5 / double(r.person_ticks) : 0, w_neg = r.empty_ticks ? 0.5 / double(r.empty_ticks) : 0;
+  std::vector<double> weight(r.bins.size(), 0.0);
   for (const auto& s : samples) {
-    const double p = presence_probability(s.share, a, b);
+    const double p = presence_probability(s.share, a, b), w = s.person ? w_pos : w_neg;
     const bool called = p >= threshold;
-    if (s.person) ++r.person_ticks, hits += called;
-    else ++r.empty_ticks, alarms += called;
-    auto& bin = r.bins[std::size_t(std::min(9, int(p * 10)))];
-    ++bin.n;
-    bin.predicted += p;
-    bin.observed += s.person;
+    (s.person ? hits : alarms) += called;
+    const std::size_t k = std::size_t(std::min(9, int(p * 10)));
+    ++r.bins[k].n;
+    weight[k] += w;
+    r.bins[k].predicted += w * p;
+    r.bins[k].observed += s.person ? w : 0;
   }
   r.hit_rate = r.person_ticks ? double(hits) / double(r.person_ticks) : 0;
   r.false_alarm_rate = r.empty_ticks ? double(alarms) / double(r.empty_ticks) : 0;
-  double ece = 0;
-  for (auto& bin : r.bins)
-    if (bin.n) {
-      bin.predicted /= double(bin.n);
-      bin.observed /= double(bin.n);
-      ece += double(bin.n) * std::abs(bin.predicted - bin.observed);
+  double ece = 0, total = 0;
+  for (std::size_t k = 0; k < r.bins.size(); ++k)
+    if (weight[k] > 0) {
+      r.bins[k].predicted /= weight[k];
+      r.bins[k].observed /= weight[k];
+      ece += weight[k] * std::abs(r.bins[k].predicted - r.bins[k].observed);
+      total += weight[k];
     }
-  r.expected_calibration_error = samples.empty() ? 0 : ece / double(samples.size());
+  r.expected_calibration_error = total > 0 ? ece / total : 0;
   return r;
 }
 
@@ -81,7 +100,8 @@ void print_presence_report(const PresenceReport& r, std::ostream& out) {
   out << std::fixed << std::setprecision(1) << "  ticks with a dancer called person: " << 100 * r.hit_rate << "% of "
       << r.person_ticks << "; empty ticks called person: " << 100 * r.false_alarm_rate << "% of " << r.empty_ticks
       << "; expected calibration error " << std::setprecision(3) << r.expected_calibration_error << "\n"
-      << "  reliability (predicted P bin: ticks, mean predicted, share with a person):\n";
+      << " (classes weighted equally)\n"
+      << "  reliability (predicted P bin: ticks, mean predicted, share with a person; classes weighted equally):\n";
   for (std::size_t i = 0; i < r.bins.size(); ++i)
     if (r.bins[i].n)
       out << "    " << std::setprecision(1) << double(i) / 10 << "-" << double(i + 1) / 10 << ": " << r.bins[i].n << ", "

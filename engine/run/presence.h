@@ -31,7 +31,7 @@ struct PresenceReport {
   double hit_rate = 0;          // share of person ticks called person
   double false_alarm_rate = 0;  // share of empty ticks called person
   // Reliability: per bin of predicted P (10 bins), ticks, mean predicted P and the share
-  // that truly had a person.
+  // that truly had a person, both classes weighing half (as in the fit).
   struct Bin {
     std::uint64_t n = 0;
     double predicted = 0, observed = 0;
