@@ -1,5 +1,8 @@
 #include "weights_tools/weights_file.h"
 
+#include "camera/io/format_error.h"
+#include "camera/io/untrusted.h"
+
 #include <hdf5.h>
 #include <unistd.h>
 
@@ -163,6 +166,11 @@ WeightsReader::WeightsReader(const std::string& path) : file_(std::make_unique<F
   if (!fs::is_regular_file(path, ec)) bad(path, "not a regular file");
   file_->bytes = fs::file_size(path, ec);
   if (H5Fis_hdf5(path.c_str()) <= 0) bad(path, "not an HDF5 file");
+  try {
+    camera::vet_in_child(path, [&] { load_weights(path); });
+  } catch (const camera::FormatError& e) {
+    bad(path, e.problem());
+  }
   file_->file = must(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), path,
                      "cannot open as HDF5 (truncated or corrupt)");
   const hid_t root = file_->file.get();

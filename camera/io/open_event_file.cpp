@@ -4,6 +4,7 @@
 #include "camera/io/aedat_legacy.h"
 #include "camera/io/byte_source.h"
 #include "camera/io/readers.h"
+#include "camera/io/untrusted.h"
 
 namespace yelan::camera {
 namespace {
@@ -47,7 +48,14 @@ std::unique_ptr<EventReader> open_event_file(const std::string& path) {
   if (f == "aedat4") return open_aedat4(path);
   if (f == "prophesee-raw") return open_prophesee_raw(path);
   if (f == "text") return open_text_events(path);
-  if (f == "hdf5") return open_hdf5_events(path);
+  if (f == "hdf5") {
+    vet_in_child(path, [&] {
+      auto r = open_hdf5_events(path);
+      std::vector<Event> v;
+      while (r->read(v, 1 << 20)) v.clear();
+    });
+    return open_hdf5_events(path);
+  }
   if (f == "aedat-old") return open_aedat_legacy(path);
   if (f == "npy") return open_npy_events(path);
   throw FormatError(path, 0, "unknown event file format (no known magic bytes or extension)");

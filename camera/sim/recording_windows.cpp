@@ -9,7 +9,9 @@
 #include <stdexcept>
 
 #include "camera/io/event_reader.h"
+#include "camera/io/format_error.h"
 #include "camera/io/h5.h"
+#include "camera/io/untrusted.h"
 #include "camera/sim/rng.h"
 
 namespace yelan::camera::sim {
@@ -20,8 +22,9 @@ namespace {
 
 constexpr const char* kSuffix = ".yelan.h5";
 
+// A FormatError: a malformed recording is bad input (exit 2), as any other malformed file.
 [[noreturn]] void fail(const std::string& path, const std::string& what) {
-  throw std::runtime_error(path + ": " + what);
+  throw FormatError(path, 0, what);
 }
 
 // Rows of an N x (row dims) dataset, all of them, as mem_type; checks the row shape.
@@ -40,8 +43,32 @@ std::vector<T> read_all(hid_t f, const std::string& path, const std::string& nam
   return out;
 }
 
+RecordingInfo read_info(hid_t f, const std::string& path);
+
+// Everything a reader of the recording will touch: labels, cameras, every mask, every event.
+void read_whole_recording(const std::string& path) {
+  h5::silence_errors();
+  const h5::H5Id f = h5::open_file(path);
+  const RecordingInfo info = read_info(f.get(), path);
+  h5::H5Id masks = h5::check(H5Dopen2(f.get(), "masks/data", H5P_DEFAULT), "open masks/data");
+  const auto dims = h5::shape(masks.get());
+  if (dims.size() != 3 || dims[1] != hsize_t(info.camera.height) || dims[2] != hsize_t(info.camera.width)) return;
+  std::vector<std::uint8_t> one(std::size_t(dims[1]) * dims[2]);
+  for (hsize_t m = 0; m < dims[0]; ++m) {
+    const hsize_t start[3] = {m, 0, 0}, count[3] = {1, dims[1], dims[2]};
+    h5::H5Id fspace = h5::check(H5Dget_space(masks.get()), "dataspace");
+    h5::check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select mask");
+    h5::H5Id mspace = h5::check(H5Screate_simple(3, count, nullptr), "dataspace");
+    h5::check(H5Dread(masks.get(), H5T_NATIVE_UINT8, mspace.get(), fspace.get(), H5P_DEFAULT, one.data()), "read mask");
+  }
+  auto events = open_event_file(path);
+  std::vector<Event> v;
+  while (events->read(v, 1 << 20)) v.clear();
+}
+
 h5::H5Id open_recording(const std::string& path) {
   h5::silence_errors();
+  vet_in_child(path, [&] { read_whole_recording(path); });
   try {
     return h5::open_file(path);
   } catch (const std::exception& e) {
