@@ -132,8 +132,9 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   const std::string js = yelan::test::slurp(d / "eval.json");
   for (const char* key : {"\"mpjpe_mm\"", "\"pck150\"", "\"auc\"", "\"mpjpe_root_mm\"", "\"frames\": 4", "\"by_condition\"",
                           "\"lighting\"", "\"mask_iou\"", "\"floors\"", "\"constant\"", "\"mean_pose_at_hip\"",
-                          "\"per_view_mean_pose_at_hip\"", "\"swap_share_by_view\""})
+                          "\"per_view_mean_pose_at_hip\"", "\"swap_share_by_view\"", "\"mask_iou_by_condition\""})
     CHECK(yelan::test::contains(js, key));
+  CHECK(yelan::test::contains(ev.out, ", IoU "));  // the mask IoU of each condition beside its MPJPE
   // Weights and state from different steps (a stop between the two writes) are refused.
   std::filesystem::copy_file(d / "crop.h5", d / "b/checkpoint.h5", std::filesystem::copy_options::overwrite_existing);
   const auto mixed = run("b", "6", {"--resume"});

@@ -57,6 +57,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   PoseMetrics all;
   std::map<std::string, std::map<std::string, PoseMetrics>> cond;
   double inter = 0, uni = 0;
+  std::map<std::string, std::map<std::string, std::pair<double, double>>> cond_iou;  // inter, union
   BatchBuilder builder(cfg, 1, spec.true_mask ? MaskSource::truth : MaskSource::net);
   std::optional<Floors> floors;
   if (spec.floors) floors.emplace(training_floor_stats());
@@ -87,6 +88,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         const layers::Act& m = mask.masks();
         const int d = cfg.downscale;
         std::vector<float> keep;
+        const double inter0 = inter, uni0 = uni;
         for (int t = 0; t < cfg.window; ++t) {
           const auto& truth = win.frames[std::size_t(t)].mask;
           input::mask_cut(m, t, 0, keep);
@@ -97,6 +99,11 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
               inter += pr && tr;
               uni += pr || tr;
             }
+        }
+        for (const auto& [name, value] : conditions) {
+          auto& [ci, cu] = cond_iou[name][value];
+          ci += inter - inter0;
+          cu += uni - uni0;
         }
       }
     }
@@ -150,6 +157,9 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   for (const auto& [name, values] : cond)
     for (const auto& [value, m] : values)
       if (m.scores().frames > 0) res.by_condition[name][value] = m.scores();  // empty scenes score no frame
+  for (const auto& [name, values] : cond_iou)
+    for (const auto& [value, iu] : values)
+      if (iu.second > 0) res.mask_iou_by_condition[name][value] = iu.first / iu.second;
   res.scenes = total;
   if (floors) res.floors = floors->scores();
   res.swap_share_by_view = swaps.by_view();
@@ -187,6 +197,10 @@ std::string eval_json(const EvalResult& r) {
   for (const auto& [name, values] : r.by_condition)
     for (const auto& [value, s] : values) bc[name][value] = scores_json(s);
   j["by_condition"] = bc;
+  nlohmann::ordered_json ic = nlohmann::ordered_json::object();
+  for (const auto& [name, values] : r.mask_iou_by_condition)
+    for (const auto& [value, iou] : values) ic[name][value] = iou;
+  j["mask_iou_by_condition"] = ic;
   return j.dump(2) + "\n";
 }
 
@@ -215,7 +229,14 @@ std::string eval_table(const EvalResult& r) {
   o << std::setprecision(1) << " of frames\n";
   for (const auto& [name, values] : r.by_condition) {
     o << name << ":";
-    for (const auto& [value, s] : values) o << "  " << value << " " << s.mpjpe_mm << " mm (" << s.frames << " frames)";
+    const auto ious = r.mask_iou_by_condition.find(name);
+    for (const auto& [value, s] : values) {
+      o << "  " << value << " " << s.mpjpe_mm << " mm (" << s.frames << " frames";
+      if (ious != r.mask_iou_by_condition.end())
+        if (const auto it = ious->second.find(value); it != ious->second.end())
+          o << ", IoU " << std::setprecision(3) << it->second << std::setprecision(1);
+      o << ")";
+    }
     o << "\n";
   }
   return o.str();

@@ -32,6 +32,8 @@ struct EvalResult {
   double mask_iou = 0;  // -1 with true masks (no stage 1 ran): n/a
   // condition name -> value -> scores (lighting, background, view, character, clothing, occlusion)
   std::map<std::string, std::map<std::string, PoseScores>> by_condition;
+  // the same conditions' mask IoU (stage 1 against the true mask); empty with true masks
+  std::map<std::string, std::map<std::string, double>> mask_iou_by_condition;
   std::string config;
   std::uint64_t scenes = 0;
   std::map<std::string, PoseScores> floors;         // predictor name -> scores, same frames
