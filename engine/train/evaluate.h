@@ -38,6 +38,9 @@ struct EvalResult {
   std::uint64_t scenes = 0;
   std::map<std::string, PoseScores> floors;         // predictor name -> scores, same frames
   std::map<std::string, double> swap_share_by_view;  // share of frames better with L/R swapped
+  // The same frames with each pose or its left/right swap, whichever is closer (an oracle):
+  // how much of the error is telling left from right (front from back).
+  PoseScores swap_oracle;
 };
 
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err);
