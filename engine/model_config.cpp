@@ -106,7 +106,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.representation == "tore" || c.representation == "counts", "input.representation must be tore or counts"},
       {c.representation != "tore" || c.channels % 2 == 0, "input.channels must be even for TORE (2K planes)"},
       {c.representation != "counts" || c.channels == 2, "input.channels must be 2 for counts (one per polarity)"},
-      {c.run_beta >= 0 && c.run_beta <= 1, "run.beta must be in 0..1"},
+      {c.run_beta >= 0 && c.run_beta <= 2, "run.beta must be in 0..2 (above 1: stage 1 on every tick)"},
       {std::isfinite(c.presence_a) && std::isfinite(c.presence_b) && c.presence_a >= 0,
        "run.presence: a must be finite and >= 0, b finite"},
       {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},

@@ -28,7 +28,7 @@ struct ModelConfig {
   // of each polarity in the last frame period, log(1 + n); the constant-time-frame baseline)
   std::string representation = "tore";
   // run (optional): how `yelan run` uses this model, chosen on validation data.
-  //   run.beta: the early-exit threshold it ships with.
+  //   run.beta: the early-exit threshold it ships with (above 1: stage 1 on every tick).
   //   run.presence {a, b}: P(person) = sigmoid(a * ln(s + 0.001) + b), s the share of the
   //   frame the mask in use covers (fitted by `yelan calibrate`); absent, a fixed guess that
   //   puts P = 0.5 near s = 1% (presence_calibrated false says so).

@@ -134,10 +134,10 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
     CHECK(arows[i][42] == "1");
   }
   // A calibration out of range is refused by the config's checks, naming the key.
-  std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"beta\": 1.5}}\n";
+  std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"beta\": 2.5}}\n";
   const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
   CHECK(bad.code == 2);
-  CHECK(contains(bad.err, "run.beta must be in 0..1"));
+  CHECK(contains(bad.err, "run.beta must be in 0..2"));
 }
 
 #include "engine/run/viz.h"
@@ -371,4 +371,27 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(run_cli({"weights", "diff", d / "w.h5", d / "c.h5"}).code == 0);
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "w.h5"}).code == 2);
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "-o", d / "x.h5"}).code == 2);
+  // --choose-beta sweeps beta on the dancer recordings and stores the cheapest within tolerance.
+  const auto b = run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "b.h5", "--seconds",
+                          "0.3", "--skip", "0.1", "--choose-beta"});
+  INFO(b.err);
+  REQUIRE(b.code == 0);
+  CHECK(contains(b.out, "beta sweep"));
+  CHECK(contains(b.out, "chosen: beta "));
+  CHECK(contains(run_cli({"weights", "inspect", d / "b.h5"}).out, "\"beta\""));
+  CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "y.h5", "--beta", "0.9",
+                 "--choose-beta"})
+            .code == 2);
+}
+
+#include "engine/run/early_exit.h"
+
+TEST_CASE("run: the chosen beta runs stage 1 least within the IoU tolerance", "[run]") {
+  using yelan::run::BetaPoint;
+  const std::vector<BetaPoint> pts = {{0.5, 0.10, 0.60, 1}, {0.8, 0.30, 0.70, 1}, {0.9, 0.50, 0.79, 1}, {1.01, 1.0, 0.80, 1}};
+  CHECK(yelan::run::choose_beta(pts, 0.02).beta == 0.9);
+  CHECK(yelan::run::choose_beta(pts, 0.15).beta == 0.8);
+  CHECK(yelan::run::choose_beta(pts, 0.0).beta == 1.01);
+  CHECK(yelan::run::choose_beta(pts, 1.0).beta == 0.5);
+  CHECK_THROWS(yelan::run::choose_beta({}, 0.02));
 }

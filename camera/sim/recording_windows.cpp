@@ -127,6 +127,26 @@ RecordingInfo read_recording_info(const std::string& path) {
   return read_info(file.get(), path);
 }
 
+std::vector<std::uint8_t> read_recording_masks(const std::string& path, std::size_t first, std::size_t n) {
+  const h5::H5Id file = open_recording(path);
+  try {
+    h5::H5Id masks = h5::check(H5Dopen2(file.get(), "masks/data", H5P_DEFAULT), "open masks/data");
+    const auto dims = h5::shape(masks.get());
+    if (dims.size() != 3) fail(path, "masks/data is not masks x height x width");
+    if (first >= dims[0]) return {};
+    n = std::min<std::size_t>(n, std::size_t(dims[0]) - first);
+    std::vector<std::uint8_t> out(n * std::size_t(dims[1]) * dims[2]);
+    const hsize_t start[3] = {hsize_t(first), 0, 0}, count[3] = {hsize_t(n), dims[1], dims[2]};
+    h5::H5Id fspace = h5::check(H5Dget_space(masks.get()), "dataspace");
+    h5::check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select masks");
+    h5::H5Id mspace = h5::check(H5Screate_simple(3, count, nullptr), "dataspace");
+    if (n) h5::check(H5Dread(masks.get(), H5T_NATIVE_UINT8, mspace.get(), fspace.get(), H5P_DEFAULT, out.data()), "read masks");
+    return out;
+  } catch (const h5::H5Failure& e) {
+    fail(path, e.what());
+  }
+}
+
 std::vector<std::string> list_recordings(const std::string& dir) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw std::runtime_error(dir + ": not a directory");

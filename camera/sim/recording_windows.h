@@ -30,6 +30,10 @@ struct RecordingInfo {
 // the file and what is missing or malformed.
 RecordingInfo read_recording_info(const std::string& path);
 
+// Masks first .. first + n - 1 of a recording (height x width bytes each, nonzero: the
+// dancer), clamped to the masks it has. Throws FormatError naming the file.
+std::vector<std::uint8_t> read_recording_masks(const std::string& path, std::size_t first, std::size_t n);
+
 // The *.yelan.h5 files in dir, sorted by name. Throws when there are none.
 std::vector<std::string> list_recordings(const std::string& dir);
 

@@ -14,6 +14,7 @@
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
 #include "engine/cli/run_output.h"
+#include "engine/run/early_exit.h"
 #include "engine/run/presence.h"
 #include "camera/sim/recording_windows.h"
 #include "weights_tools/json.h"
@@ -276,9 +277,28 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   std::ostringstream pj;
   pj << std::setprecision(9) << "{\"a\": " << fit.a << ", \"b\": " << fit.b << "}";
   wt.config_json = with_run_setting(wt.config_json, "presence", pj.str());
-  if (beta) wt.config_json = with_run_setting(wt.config_json, "beta", std::to_string(beta_v));
+  std::optional<double> chosen;
+  if (beta) chosen = beta_v;
+  if (a.flag("--choose-beta")) {
+    if (beta) throw UsageError("weights calibrate: --beta and --choose-beta exclude each other");
+    const double tol = a.number_or("--beta-tolerance", 0.02, 0, 1);
+    const std::vector<double> betas = {0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.99, 1.01};
+    err << "choosing beta on the recordings with a dancer (mask in use against the true mask):\n";
+    const auto points = run::sweep_beta(*w, recs, betas, rate, seconds, skip, err);
+    const run::BetaPoint pick = run::choose_beta(points, tol);
+    out << std::defaultfloat << std::setprecision(3) << "beta sweep (stage 1 share of ticks, mask IoU):";
+    for (const auto& p : points) out << "  " << p.beta << ": " << p.stage1_share << ", " << p.iou;
+    out << "\nchosen: beta " << pick.beta << ", stage 1 on " << 100 * pick.stage1_share << "% of the ticks, IoU " << pick.iou
+        << " (within " << tol << " of the best)\n";
+    chosen = pick.beta;
+  }
+  if (chosen) {
+    std::ostringstream bj;
+    bj << std::setprecision(9) << *chosen;
+    wt.config_json = with_run_setting(wt.config_json, "beta", bj.str());
+  }
   weights::save_weights(*o, wt);
-  out << "wrote " << *o << " (config run.presence" << (beta ? " and run.beta" : "") << ")\n";
+  out << "wrote " << *o << " (config run.presence" << (chosen ? " and run.beta" : "") << ")\n";
   return kOk;
 }
 
@@ -294,7 +314,8 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "verify") return verify(Args("weights verify", rest, {"--config"}, {}), out, err);
     if (sub == "init") return weights_init(rest, out);
     if (sub == "calibrate")
-      return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta"}, {}),
+      return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta", "--beta-tolerance"},
+                            {"--choose-beta"}),
                        out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
   } catch (const weights::WeightsError& e) {

@@ -124,7 +124,7 @@ def config_from_dict(d, where="config"):
         pa = _get(run["presence"], where + ".run.presence", "a", float)
         pb = _get(run["presence"], where + ".run.presence", "b", float)
     checks = [
-        (0 <= beta <= 1, "run.beta must be in 0..1"),
+        (0 <= beta <= 2, "run.beta must be in 0..2 (above 1: stage 1 on every tick)"),
         (math.isfinite(pa) and math.isfinite(pb) and pa >= 0, "run.presence: a must be finite and >= 0, b finite"),
         (cfg.channels >= 1, "input.channels must be >= 1"),
         (cfg.downscale >= 1, "input.downscale must be >= 1"),

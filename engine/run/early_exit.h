@@ -1,0 +1,30 @@
+// Choosing the early-exit threshold beta on validation recordings: the deployed pipeline
+// runs over each dancer recording once per beta, and at every tick the mask in use (fresh or
+// a stored future mask) is compared with the recording's true mask. The beta a model ships
+// with (its config's run.beta) is the one that runs stage 1 least while keeping the mask
+// IoU within a tolerance of stage 1 on every tick.
+#pragma once
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace yelan::run {
+
+struct BetaPoint {
+  double beta = 0;
+  double stage1_share = 0;  // of the ticks with events
+  double iou = 0;           // mask in use against the true mask, pooled over ticks
+  std::uint64_t ticks = 0;
+};
+
+// One point per beta (in the order given), over at most `seconds` of each recording after
+// `skip_s` (the TORE filling).
+std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<std::string>& recordings,
+                                  const std::vector<double>& betas, double rate_hz, double seconds, double skip_s,
+                                  std::ostream& progress);
+
+// The point with the smallest stage-1 share whose IoU is at least the best IoU of the sweep
+// minus `tolerance` (ties: the larger beta).
+BetaPoint choose_beta(const std::vector<BetaPoint>& points, double tolerance);
+
+}  // namespace yelan::run
