@@ -28,7 +28,7 @@ double view_yaw_deg(View v);
 const char* view_name(View v);
 
 // A DAVIS346 (346x260) with focal length f px and the principal point at the centre.
-CameraModel davis346(double focal_px = 485);
+CameraModel davis346(double focal_px = kDavis346FocalPx);
 
 // Camera at horizontal distance distance_mm from the z axis, height_mm above the floor,
 // turned by yaw about z (front = 0), tilted down by pitch_deg; K from `intrinsics`.
@@ -36,7 +36,7 @@ CameraModel davis346(double focal_px = 485);
 CameraModel orbit_camera(double yaw_deg, double pitch_deg, double distance_mm, double height_mm,
                          const CameraModel& intrinsics);
 CameraModel view_camera(View v, double distance_mm = 3500, double height_mm = 1200,
-                        double pitch_deg = kAimAtBody, double focal_px = 485);
+                        double pitch_deg = kAimAtBody, double focal_px = kDavis346FocalPx);
 // Camera centre in world coordinates (mm).
 Vec3 camera_centre(const CameraModel& cam);
 

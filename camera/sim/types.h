@@ -50,6 +50,10 @@ inline constexpr std::array<BodyPoint, kJointCount> kDhp19Points = {
     kHead, kShoulderR, kShoulderL, kElbowR, kElbowL, kHipR, kHipL,
     kWristR, kWristL, kKneeR, kKneeL, kAnkleR, kAnkleL};
 using Joints13 = std::array<Vec3, kJointCount>;
+// Their names, as CSV headers and reports spell them.
+inline constexpr std::array<const char*, kJointCount> kJointNames = {
+    "head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",
+    "handR", "handL", "kneeR", "kneeL", "footR", "footL"};
 
 inline Joints13 dhp19_joints(const BodyPose& pose) {
   Joints13 j;
@@ -96,10 +100,14 @@ struct Primitive {
   bool human = false;  // counts towards the human mask (body, clothes, hair, hat)
 };
 
+// The DAVIS346 with its standard lens: the focal length in pixels the simulator renders
+// with and `yelan run` assumes.
+inline constexpr double kDavis346FocalPx = 485;
+
 // Pinhole camera, no distortion. K in pixels, M world (mm) -> camera (mm).
 struct CameraModel {
   int width = 346, height = 260;
-  double fx = 485, fy = 485, cx = 173, cy = 130;
+  double fx = kDavis346FocalPx, fy = kDavis346FocalPx, cx = 173, cy = 130;
   Eigen::Matrix<double, 3, 4> M = Eigen::Matrix<double, 3, 4>::Zero();
   Eigen::Matrix3d K() const {
     Eigen::Matrix3d k;

@@ -116,4 +116,20 @@ std::vector<std::string> split_list(const std::string& text) {
   return out;
 }
 
+double parse_duration_s(const std::string& text, const std::string& flag) {
+  double value = 0;
+  const char* end = text.data() + text.size();
+  const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  const std::string unit(ptr, end);
+  double scale = 0;
+  if (unit.empty() || unit == "s") scale = 1;
+  else if (unit == "ms") scale = 1e-3;
+  else if (unit == "m" || unit == "min") scale = 60;
+  else if (unit == "h") scale = 3600;
+  const double s = value * scale;
+  if (ec != std::errc() || ptr == text.data() || scale == 0 || !std::isfinite(s) || !(s > 0) || s > 1e9)
+    throw UsageError(flag + " expects a positive time like 10s, 500ms, 2m or 1h, got '" + text + "'");
+  return s;
+}
+
 }  // namespace yelan::cli

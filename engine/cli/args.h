@@ -41,6 +41,10 @@ class Args {
   std::vector<std::string> positionals_;
 };
 
+// A duration: "10s", "1.5s", "500ms", "2m" (or "2min"), "1h", or a plain number of seconds;
+// positive and finite. Throws UsageError naming `flag`. The one duration parser of the CLI.
+double parse_duration_s(const std::string& text, const std::string& flag = "--duration");
+
 // "a,b,,c" -> {a, b, c}: the comma lists of options such as --configs or --threads-list.
 std::vector<std::string> split_list(const std::string& text);
 

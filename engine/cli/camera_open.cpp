@@ -18,22 +18,6 @@ extern "C" void on_interrupt(int) { g_interrupted = 1; }
 
 }  // namespace
 
-std::chrono::milliseconds parse_duration(const std::string& text) {
-  double value = 0;
-  const char* end = text.data() + text.size();
-  auto [ptr, ec] = std::from_chars(text.data(), end, value);
-  const std::string unit(ptr, end);
-  double ms_per_unit = 0;
-  if (unit.empty() || unit == "s") ms_per_unit = 1000;
-  else if (unit == "ms") ms_per_unit = 1;
-  else if (unit == "m" || unit == "min") ms_per_unit = 60000;
-  else if (unit == "h") ms_per_unit = 3600000;
-  const double ms = value * ms_per_unit;
-  if (ec != std::errc() || ptr == text.data() || ms_per_unit == 0 || !(ms > 0) || ms > 1e12)
-    throw UsageError("--duration expects a positive time like 10s, 500ms or 2m, got '" + text + "'");
-  return std::chrono::milliseconds(static_cast<std::int64_t>(ms + 0.5));
-}
-
 std::string describe_camera(const usb::DeviceInfo& d) {
   char where[48];
   std::snprintf(where, sizeof where, "bus %03u address %03u", d.bus, d.address);

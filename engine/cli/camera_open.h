@@ -14,9 +14,6 @@
 
 namespace yelan::cli {
 
-// "10s", "1.5s", "500ms", "2m", "1h", or a plain number of seconds. Throws UsageError.
-std::chrono::milliseconds parse_duration(const std::string& text);
-
 inline constexpr const char* kNoCamera =
     "no camera found (looked for iniVation DAVIS346 152a:841a and DVXplorer 152a:8419 on USB)";
 

@@ -1,6 +1,7 @@
 // `yelan devices` and `yelan record`: list attached DAVIS346/DVXplorer cameras, and record
 // one of them to an event file through the clean-room libusb driver in camera/usb/.
 #include <chrono>
+#include <cmath>
 #include <optional>
 
 #include "camera/io/event_writer.h"
@@ -33,7 +34,7 @@ int cmd_record(const std::vector<std::string>& args, std::ostream& out, std::ost
   if (camera::writer_format_for(path).empty())
     throw UsageError("cannot tell the output format of '" + path + "' (use .aedat4, .txt or .yelan.h5)");
   std::optional<std::chrono::milliseconds> duration;
-  if (const auto d = a.value("--duration")) duration = parse_duration(*d);
+  if (const auto d = a.value("--duration")) duration = std::chrono::milliseconds(std::llround(parse_duration_s(*d) * 1000));
 
   OpenCamera cam = open_camera(a.value("--camera"));
   usb::CameraDevice* device = cam.device.get();

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -77,7 +78,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   if (!cam.wanted && a.positionals().empty()) throw UsageError("run needs an event FILE (or --camera)");
   if (!cam.wanted && a.value("--duration")) throw UsageError("--duration is for --camera (a file runs to its end)");
   std::optional<std::chrono::milliseconds> duration;
-  if (const auto d = a.value("--duration")) duration = parse_duration(*d);
+  if (const auto d = a.value("--duration")) duration = std::chrono::milliseconds(std::llround(parse_duration_s(*d) * 1000));
   RunSetup setup;
   setup.weights = *w;
   setup.out = a.value("--out");

@@ -28,21 +28,6 @@ namespace {
 
 namespace sim = camera::sim;
 
-// "2s", "500ms", "1.5m", "90" (seconds).
-double parse_duration(const std::string& s) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(s, &used);
-  } catch (const std::exception&) {
-    throw UsageError("--duration '" + s + "': expected a number with an optional unit (ms, s, m)");
-  }
-  const std::string unit = s.substr(used);
-  const double scale = unit.empty() || unit == "s" ? 1 : unit == "ms" ? 1e-3 : unit == "m" || unit == "min" ? 60 : -1;
-  if (scale < 0 || !(v > 0)) throw UsageError("--duration '" + s + "': expected a positive number with ms, s or m");
-  return v * scale;
-}
-
 std::vector<std::string> csv(const std::optional<std::string>& s) { return s ? split_list(*s) : std::vector<std::string>{}; }
 
 // A grid member's seed: stable under filtering and reordering of the grid.
@@ -136,7 +121,7 @@ int run_grid(const std::string& which, const Args& a, std::ostream& out, std::os
   const int limit = a.int_value_or("--limit", int(names.size()), 0, 1 << 30);
   if (int(names.size()) > limit) names.resize(std::size_t(limit));
   if (names.empty()) throw UsageError("sim --grid " + which + ": the filters leave no scene");
-  const double duration = parse_duration(a.value_or("--duration", "2s"));
+  const double duration = parse_duration_s(a.value_or("--duration", "2s"));
   const std::uint64_t seed = a.u64_value_or("--seed", 1, (1ull << 48) - 1);
   std::filesystem::create_directories(*dir);
   std::ostringstream manifest;
@@ -182,7 +167,7 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   d.train_empty = a.int_value_or("--train-empty", 0, 0, 1 << 20);
   d.val_empty = a.int_value_or("--val-empty", 0, 0, 1 << 20);
   d.test_empty = a.int_value_or("--test-empty", 0, 0, 1 << 20);
-  d.duration_s = parse_duration(a.value_or("--duration", "5s"));
+  d.duration_s = parse_duration_s(a.value_or("--duration", "5s"));
   d.threads = a.int_value_or("--threads", 0, 0, 256);
   d.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   try {
@@ -244,7 +229,7 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
     if (spec.name.empty()) spec.name = std::filesystem::path(*config).stem().string();
   }
   spec.seed = a.u64_value_or("--seed", spec.seed, (1ull << 48) - 1);
-  if (const auto d = a.value("--duration")) spec.duration_s = parse_duration(*d);
+  if (const auto d = a.value("--duration")) spec.duration_s = parse_duration_s(*d);
   return run_one(spec, a, out, err);
 }
 

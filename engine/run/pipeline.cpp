@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "camera/repr/tore.h"
+#include "camera/sim/motion.h"
 #include "engine/input.h"
 #include "engine/train/pose_norm.h"
 #include "weights_tools/network_io.h"
@@ -20,12 +21,10 @@ using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
 
 constexpr double kTrainFrameHz = 50;  // the rate the future masks were trained at
-constexpr double kFocalPx = 485;      // DAVIS346 with its standard lens
+constexpr double kFocalPx = camera::sim::kDavis346FocalPx;
 
-// Limb bones over the DHP19 joints (shoulder-elbow, elbow-hand, hip-knee, knee-foot, both
-// sides) and their share of standing height (Drillis-Contini, as the simulator's bodies).
+// Limb bones over the DHP19 joints: shoulder-elbow, elbow-hand, hip-knee, knee-foot, both sides.
 constexpr int kBones[8][2] = {{1, 3}, {3, 7}, {2, 4}, {4, 8}, {5, 9}, {9, 11}, {6, 10}, {10, 12}};
-constexpr double kBoneShare[8] = {0.186, 0.146, 0.186, 0.146, 0.245, 0.246, 0.245, 0.246};
 
 // The smallest box holding every nonzero pixel of a w x h mask; empty for an empty mask.
 PoseNet::CropBox bounding_box(const std::vector<float>& mask, int w, int h) {
@@ -44,12 +43,16 @@ PoseNet::CropBox bounding_box(const std::vector<float>& mask, int w, int h) {
 }  // namespace
 
 double head_depth_from_height(const std::array<std::array<double, 3>, 13>& unit, double height_mm) {
-  double sum = 0, prior = 0;
-  for (int b = 0; b < 8; ++b) {
-    const auto& p = unit[std::size_t(kBones[b][0])];
-    const auto& q = unit[std::size_t(kBones[b][1])];
+  // The limbs' lengths for this height, as the simulator's bodies have them (Drillis-Contini).
+  camera::sim::BodyShape shape;
+  shape.height_mm = height_mm;
+  const camera::sim::BodyProportions b = camera::sim::body_proportions(shape);
+  const double prior = 2 * (b.upper_arm + b.forearm + b.thigh + b.shank);
+  double sum = 0;
+  for (const auto& bone : kBones) {
+    const auto& p = unit[std::size_t(bone[0])];
+    const auto& q = unit[std::size_t(bone[1])];
     sum += std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
-    prior += kBoneShare[b] * height_mm;
   }
   return sum > 1e-9 ? prior / sum : 0;
 }
@@ -361,10 +364,8 @@ double early_exit_saved_ms(const RunStats& s) {
 double crop_share(const RunStats& s) { return s.crop_runs ? s.crop_area / double(s.crop_runs) : 1.0; }
 
 std::string pose_csv_header() {
-  static const char* names[13] = {"head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",
-                                  "handR", "handL", "kneeR", "kneeL", "footR", "footL"};
   std::string h = "t_us";
-  for (const char* n : names)
+  for (const char* n : camera::sim::kJointNames)
     for (const char* c : {"x", "y", "z"}) h += std::string(",") + n + "_" + c;
   return h + ",confidence,mask_ran,person,pose_confidence,mask_share";
 }

@@ -184,8 +184,7 @@ nlohmann::ordered_json scores_json(const PoseScores& s) {
   return {{"mpjpe_mm", s.mpjpe_mm}, {"pck150", s.pck150}, {"auc", s.auc}, {"mpjpe_root_mm", s.mpjpe_root_mm},
           {"pck150_root", s.pck150_root}, {"auc_root", s.auc_root}, {"frames", s.frames}};
 }
-const char* kJointNames[kJoints] = {"head", "shoulderR", "shoulderL", "elbowR", "elbowL", "hipR", "hipL",
-                                    "handR", "handL", "kneeR", "kneeL", "footR", "footL"};
+using camera::sim::kJointNames;
 }  // namespace
 
 std::string pose_scores_json(const PoseScores& s) { return scores_json(s).dump(); }
