@@ -107,6 +107,18 @@ TEST_CASE("Args parses values, flags and positionals and rejects the rest", "[cl
                     Catch::Contains("'abc'"));
 }
 
+TEST_CASE("parse_duration_s reads ms, s, m and h, and refuses the rest naming the flag", "[cli]") {
+  using yelan::cli::parse_duration_s;
+  CHECK(parse_duration_s("90") == 90);
+  CHECK(parse_duration_s("1.5s") == 1.5);
+  CHECK(parse_duration_s("500ms") == Approx(0.5));
+  CHECK(parse_duration_s("2m") == 120);
+  CHECK(parse_duration_s("2min") == 120);
+  CHECK(parse_duration_s("1h") == 3600);
+  for (const char* bad : {"", "s", "0", "-1s", "1d", "nan", "inf", "1e300h", "2 s", "abc"})
+    CHECK_THROWS_WITH(parse_duration_s(bad, "--window"), Catch::Contains("--window expects a positive time"));
+}
+
 TEST_CASE("Args::number_or takes finite numbers in range only, naming the option and the range", "[cli]") {
   auto num = [](const std::string& v, double lo, double hi, bool open = false) {
     return Args("x", {"--v", v}, {"--v"}, {}).number_or("--v", -7, lo, hi, open);
