@@ -8,8 +8,12 @@
 #include <string>
 #include <vector>
 
+#include <hdf5.h>
+
 #include "camera/io/event_writer.h"
 #include "camera/io/flatbuf.h"
+#include "camera/io/h5.h"
+#include "weights_tools/weights_file.h"
 
 namespace fs = std::filesystem;
 using Bytes = std::vector<unsigned char>;
@@ -82,6 +86,63 @@ void write_events(const std::string& path, int n, int w, int h) {
   wr->close();
 }
 
+// A labelled recording as `yelan sim` lays it out, on a 16 x 12 sensor so it stays small:
+// events, /camera (width, height, K), /labels (t, joints, valid), /masks (t, data).
+void write_recording(const std::string& path) {
+  namespace h5 = yelan::camera::h5;
+  constexpr int W = 16, H = 12, L = 12, M = 3;
+  auto wr = yelan::camera::open_yelan_h5_writer(path, {"", W, H, {}, {}});
+  std::vector<yelan::camera::Event> ev;
+  for (int i = 0; i < 200; ++i)
+    ev.push_back({i * 300, std::uint16_t(i * 7 % W), std::uint16_t(i * 5 % H), std::uint8_t(i & 1)});
+  wr->write(ev);
+  const hid_t f = hid_t(yelan::camera::yelan_h5_file(*wr));
+  const auto put_ds = [&](const char* name, hid_t ftype, hid_t mtype, std::vector<hsize_t> dims, const void* data) {
+    h5::H5Id space = h5::check(H5Screate_simple(int(dims.size()), dims.data(), nullptr), name);
+    h5::H5Id ds = h5::check(H5Dcreate2(f, name, ftype, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+    h5::check(H5Dwrite(ds.get(), mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+  };
+  const auto put_scalar = [&](const char* name, std::int64_t v) {
+    h5::H5Id space = h5::check(H5Screate(H5S_SCALAR), name);
+    h5::H5Id ds = h5::check(H5Dcreate2(f, name, H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+    h5::check(H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v), name);
+  };
+  h5::create_group(f, "camera");
+  h5::create_group(f, "labels");
+  h5::create_group(f, "masks");
+  put_scalar("camera/width", W);
+  put_scalar("camera/height", H);
+  const double k[9] = {20, 0, 8, 0, 20, 6, 0, 0, 1};
+  put_ds("camera/K", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {3, 3}, k);
+  std::vector<std::int64_t> lt(L), mt(M);
+  std::vector<float> joints(L * 13 * 3);
+  std::vector<std::uint8_t> valid(L * 13, 1), masks(std::size_t(M) * W * H);
+  for (int i = 0; i < L; ++i) lt[std::size_t(i)] = i * 5000;
+  for (int i = 0; i < M; ++i) mt[std::size_t(i)] = i * 20000;
+  for (std::size_t i = 0; i < joints.size(); ++i) joints[i] = float(i % 97) * 10 + 3000 * float(i % 3 == 2);
+  for (std::size_t i = 0; i < masks.size(); ++i) masks[i] = (i / 5) % 2;
+  put_ds("labels/t", H5T_STD_I64LE, H5T_NATIVE_INT64, {L}, lt.data());
+  put_ds("labels/joints", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {L, 13, 3}, joints.data());
+  put_ds("labels/valid", H5T_STD_U8LE, H5T_NATIVE_UINT8, {L, 13}, valid.data());
+  put_ds("masks/t", H5T_STD_I64LE, H5T_NATIVE_INT64, {M}, mt.data());
+  put_ds("masks/data", H5T_STD_U8LE, H5T_NATIVE_UINT8, {M, H, W}, masks.data());
+  h5::write_attr_string(f, "character", "ana");
+  h5::write_attr_string(f, "scene", "{\"occluders\": false}");
+  h5::write_attr_i64(f, "dancer", 1);
+  wr->close();
+}
+
+// A weights file with a few small tensors in each group and a config (its structure, not a
+// network: load_weights does not check the config's shapes).
+void write_weights(const std::string& path) {
+  yelan::weights::Weights w;
+  w.config_json = R"({"name": "seed", "input": {}, "mask": {}, "pose": {}})";
+  w.groups["mask"]["inc.double_conv.0.weight"] = {{2, 3, 3, 3}, std::vector<float>(54, 0.25f)};
+  w.groups["mask"]["inc.double_conv.1.running_mean"] = {{2}, {0.5f, -0.5f}};
+  w.groups["pose"]["fc.bias"] = {{3}, {1, 2, 3}};
+  yelan::weights::save_weights(path, w);
+}
+
 template <typename T>
 void put(Bytes& b, T v) {
   for (std::size_t i = 0; i < sizeof(T); ++i) b.push_back(static_cast<unsigned char>(static_cast<std::uint64_t>(v) >> (8 * i)));
@@ -131,6 +192,10 @@ int main(int argc, char** argv) {
   write_events((out / "aedat4" / "ours_300.aedat4").string(), 300, 64, 48);
   write_events((out / "text" / "ours_20.txt").string(), 20, 346, 260);
   write_events((out / "hdf5" / "ours_50.yelan.h5").string(), 50, 346, 260);
+  fs::create_directories(out / "recording");
+  fs::create_directories(out / "weights");
+  write_recording((out / "recording" / "tiny.yelan.h5").string());
+  write_weights((out / "weights" / "tiny.h5").string());
   // AEDAT 2.0 (DAVIS layout, big-endian) and 3.1 (one polarity packet).
   {
     const std::string h2 = "#!AER-DAT2.0\r\n# HardwareInterface: DAVIS346\r\n";
