@@ -63,11 +63,12 @@ void draw_scene(Rng& r, const SceneDraw& d, double duration_s, SimSpec& s) {
   s.seed = r.bits() & 0xffffffffffffull;
 }
 
-// "<view>-<light>-<bg>[-occluded][-flicker]"
+// "<view>-<light>-<bg>[-occluded][-flicker][-pan|-shake]"
 std::string scene_suffix(const SimSpec& s) {
   return std::string(view_name(s.scene.view)) + "-" + light_name(s.scene.light) + "-" +
          (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static") + (s.scene.occluders ? "-occluded" : "") +
-         (s.scene.flicker ? "-flicker" : "");
+         (s.scene.flicker ? "-flicker" : "") +
+         (s.scene.camera_motion == SceneConfig::pan ? "-pan" : s.scene.camera_motion == SceneConfig::shake ? "-shake" : "");
 }
 
 }  // namespace
@@ -127,6 +128,9 @@ SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed
   s.dancer = false;
   s.motion = "dance";  // moves nothing visible; keeps the sampling rate of a scene with motion
   draw_scene(r, {45, 2500, 5000, 800, 1800, 0.34, 0.67, 0.7, 0.5, 0.3}, duration_s, s);
+  // Drawn after the rest, so the scenes of a still camera stay as they were.
+  const double u = r.uniform();
+  s.scene.camera_motion = u < 0.4 ? SceneConfig::still : u < 0.7 ? SceneConfig::pan : SceneConfig::shake;
   std::ostringstream name;
   name << split << "-empty-" << std::setw(5) << std::setfill('0') << i << "-" << scene_suffix(s);
   s.name = name.str();

@@ -37,7 +37,7 @@ bool parse_background(const std::string& s, SceneConfig::Background& b) {
   throw std::invalid_argument("preset '" + name + "': " + why +
                               " (expected <character>-<motion>-<view>-<light>-<bg> or <view>-<light>-<bg>, "
                               "view front|back|left|right, light high|medium|low, bg static|dynamic, "
-                              "optionally ending in -occluded, -flicker and/or -empty)");
+                              "optionally ending in -occluded, -flicker, -pan or -shake and/or -empty)");
 }
 
 }  // namespace
@@ -56,8 +56,11 @@ SimSpec preset_spec(const std::string& name) {
   std::vector<std::string> parts = split(name, '-');
   SimSpec spec;
   spec.name = name;
-  while (!parts.empty() && (parts.back() == "occluded" || parts.back() == "flicker" || parts.back() == "empty")) {
+  while (!parts.empty() && (parts.back() == "occluded" || parts.back() == "flicker" || parts.back() == "empty" ||
+                            parts.back() == "pan" || parts.back() == "shake")) {
     if (parts.back() == "empty") spec.dancer = false;
+    else if (parts.back() == "pan") spec.scene.camera_motion = SceneConfig::pan;
+    else if (parts.back() == "shake") spec.scene.camera_motion = SceneConfig::shake;
     else (parts.back() == "occluded" ? spec.scene.occluders : spec.scene.flicker) = true;
     parts.pop_back();
   }

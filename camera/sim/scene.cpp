@@ -23,6 +23,7 @@ enum Stream : std::uint64_t {
   kCurtainStream = 0x5743'0004,
   kScreenStream = 0x5743'0005,
   kWalkerStream = 0x5743'0006,
+  kCameraMotionStream = 0x5743'0007,
 };
 
 Primitive quad(const Vec3& corner, const Vec3& e0, const Vec3& e1, const Material& m) {
@@ -264,6 +265,38 @@ Scene::Scene(const SceneConfig& config)
     screen_ = quad(sc, 1100 * right_, 650 * up, sm);
   }
   renderer_.set_static(cam, static_, light_);
+  Rng mr(seed, kCameraMotionStream);
+  if (config.camera_motion == SceneConfig::pan) {
+    wobble_[1][0] = {6 * kDeg, kTwoPi / 8, mr.uniform(0, kTwoPi)};
+  } else if (config.camera_motion == SceneConfig::shake) {
+    for (auto& axis : wobble_) {
+      axis[0] = {0.3 * kDeg, kTwoPi * mr.uniform(2, 4), mr.uniform(0, kTwoPi)};
+      axis[1] = {0.2 * kDeg, kTwoPi * mr.uniform(5, 7), mr.uniform(0, kTwoPi)};
+    }
+  }
+}
+
+CameraModel Scene::camera_at(double t_s) const {
+  CameraModel cam = camera();
+  if (config_.camera_motion == SceneConfig::still) return cam;
+  double angle[3] = {0, 0, 0};
+  for (int a = 0; a < 3; ++a)
+    for (const Wobble& w : wobble_[std::size_t(a)]) angle[a] += w.amp * std::sin(w.rate * t_s + w.phase);
+  // A rotation about the camera's centre: applied in the camera frame, after the world one.
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(angle[2], Vec3::UnitZ()) * Eigen::AngleAxisd(angle[1], Vec3::UnitY()) *
+                             Eigen::AngleAxisd(angle[0], Vec3::UnitX()))
+                                .toRotationMatrix();
+  cam.M = r * cam.M;
+  return cam;
+}
+
+double Scene::camera_image_speed() const {
+  const CameraModel& cam = camera();
+  const double half_diagonal = 0.5 * std::hypot(cam.width, cam.height);
+  double rate = 0;  // rad/s, every axis's worst case summed
+  for (const auto& axis : wobble_)
+    for (const Wobble& w : axis) rate += w.amp * w.rate;
+  return (std::max(cam.fx, cam.fy) + half_diagonal) * rate;
 }
 
 void Scene::dynamic_primitives(double t_s, std::vector<Primitive>& out) const {
@@ -334,7 +367,13 @@ void Scene::render(double t_s, const std::vector<Primitive>& human, RenderedFram
   frame_prims_.clear();
   frame_prims_.insert(frame_prims_.end(), human.begin(), human.end());
   dynamic_primitives(t_s, frame_prims_);
-  renderer_.render(t_s, frame_prims_, out);
+  if (config_.camera_motion == SceneConfig::still) {
+    renderer_.render(t_s, frame_prims_, out);
+    return;
+  }
+  // A moving camera sees the static layer move too: the whole frame, from scratch.
+  frame_prims_.insert(frame_prims_.end(), static_.begin(), static_.end());
+  sim::render(camera_at(t_s), frame_prims_, light_, t_s, out, config_.render);
 }
 
 std::string Scene::description() const {

@@ -9,6 +9,7 @@
 // Pitch: positive tilts the camera down; kAimAtBody aims it at (0, 0, 1000).
 // Everything random is drawn from rng.h keyed by SceneConfig::seed.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -58,6 +59,12 @@ struct SceneConfig {
   enum Background { static_wall, dynamic };
   Background background = static_wall;
   bool occluders = false;  // a static box and pillar plus a panel crossing in front
+  // The camera's own motion, about its centre: pan sweeps the yaw +-6 deg back and forth
+  // every 8 s (a slow pan); shake is a hand-held tremor, about 0.5 deg at 2-7 Hz about every
+  // axis (seeded). With a moving camera every frame is rendered whole, and the labels follow
+  // the camera; a recording's /camera/M is the camera at rest.
+  enum CameraMotion { still, pan, shake };
+  CameraMotion camera_motion = still;
   std::uint64_t seed = 0;
   RenderOptions render;
 };
@@ -66,7 +73,10 @@ class Scene {
  public:
   explicit Scene(const SceneConfig& config);
 
-  const CameraModel& camera() const { return renderer_.camera(); }
+  const CameraModel& camera() const { return renderer_.camera(); }  // at rest
+  CameraModel camera_at(double t_s) const;                           // with its motion
+  // An upper bound of how fast the camera's motion moves the image, px/s (0 when still).
+  double camera_image_speed() const;
   const Lighting& light() const { return light_; }
   const SceneConfig& config() const { return config_; }
 
@@ -98,6 +108,12 @@ class Scene {
   std::optional<Primitive> screen_, panel_;
   double panel_speed_ = 0, panel_phase_ = 0, panel_span_ = 0;
   std::vector<Primitive> frame_prims_;
+  // Camera motion: per axis (x tilt, y pan, z roll) two sinusoids, amplitude (rad), rate
+  // (rad/s) and phase.
+  struct Wobble {
+    double amp = 0, rate = 0, phase = 0;
+  };
+  std::array<std::array<Wobble, 2>, 3> wobble_{};
 };
 
 }  // namespace yelan::camera::sim

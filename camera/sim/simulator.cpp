@@ -135,7 +135,7 @@ void Simulator::sample(double t_s) {
 
 Label Simulator::label_at(double t_s) const {
   const Joints13 world = dhp19_joints(motion_->at(motion_time(t_s)));
-  const CameraModel& cam = scene_.camera();
+  const CameraModel cam = scene_.camera_at(t_s);
   Label l;
   l.t_us = std::llround(t_s * 1e6);
   for (int j = 0; j < kJointCount; ++j) {
@@ -215,7 +215,7 @@ void Simulator::run_until(double t_end_s, SimSink& sink) {
     // keyframes would miss, bounds both to step_lambda thresholds of log change.
     // Capped at 3000 px/s (a hand at 15 m/s, 2.5 m away): motion capture glitches (a toe
     // flipping within one frame, in 05_16 and 05_19) must not drive sampling to its floor.
-    const double speed = std::min(image_speed(prev_pose_, pose_, step), 3000.0);
+    const double speed = std::min(std::max(image_speed(prev_pose_, pose_, step), scene_.camera_image_speed()), 3000.0);
     double want_pixel = speed > 1e-6 ? spec_.step_lambda / speed : spec_.max_step_s;
     double want_render = speed > 1e-6 ? spec_.render_lambda / speed : spec_.max_render_step_s;
     if (spec_.scene.flicker) {
@@ -252,6 +252,7 @@ std::string Simulator::description_json() const {
       {"distance_mm", sc.distance_mm},
       {"lighting", light_name(sc.light)},
       {"flicker", sc.flicker},
+      {"camera_motion", sc.camera_motion == SceneConfig::pan ? "pan" : sc.camera_motion == SceneConfig::shake ? "shake" : "still"},
       {"background", sc.background == SceneConfig::dynamic ? "dynamic" : "static"},
       {"occluders", sc.occluders},
       {"seed", spec_.seed},

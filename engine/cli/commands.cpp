@@ -52,9 +52,11 @@ const std::vector<Command>& commands() {
        "distance, height, body and clothes, lighting, background, flicker, occluders); val holds\n"
        "out two training characters and the last 15% of each training clip, test uses the test\n"
        "characters and clips; --*-empty add scenes with nobody in them (rooms, moving backgrounds,\n"
-       "flicker, occluders, noise: stage 1's negatives). Parallel over --threads (default: all\n"
-       "cores); resumable (done\n"
-       "files are kept); the same seed gives the same files.\n",
+       "flicker, occluders, noise, a panning or shaking camera: stage 1's negatives). Parallel\n"
+       "over --threads (default: all cores); resumable (done files are kept); the same seed gives\n"
+       "the same files.\n"
+       "Presets end in any of -occluded, -flicker, -pan (the camera sweeps +-6 deg every 8 s),\n"
+       "-shake (a hand-held tremor) and -empty (nobody there).\n",
        cmd_sim, "the motion-to-event simulator (issue 6)"},
       {"train", "train the mask or pose network on CPU",
        "usage: yelan train --stage mask|pose --config NAME|FILE --sim PRESETS|train -o OUTDIR\n"

@@ -2,6 +2,7 @@
 #include <omp.h>
 
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
 
 #include "camera/sim/scene.h"
@@ -266,4 +267,46 @@ TEST_CASE("render.scene a body edge moving 0.1 px over the wall changes pixels s
   }
   CHECK(worst > 5);            // the edges do move
   CHECK(worst < 0.13 * 255);   // one of 8 sub-pixel rays at a time, never a whole step
+}
+
+#include "camera/sim/simulator.h"
+
+TEST_CASE("render.scene camera motion: a still camera stays, pan sweeps about 6 deg, shake trembles, labels follow") {
+  SceneConfig c;
+  c.seed = 11;
+  const Scene still(c);
+  CHECK(still.camera_at(1.3).M.isApprox(still.camera().M));
+  CHECK(still.camera_image_speed() == 0);
+  // The angle between the optical axes at rest and at t.
+  const auto axis_angle_deg = [](const CameraModel& a, const CameraModel& b) {
+    const Vec3 za = a.M.block<1, 3>(2, 0).transpose(), zb = b.M.block<1, 3>(2, 0).transpose();
+    return std::acos(std::clamp(za.dot(zb), -1.0, 1.0)) * 180 / 3.141592653589793;
+  };
+  c.camera_motion = SceneConfig::pan;
+  const Scene pan(c);
+  double widest = 0;
+  for (double t = 0; t < 8; t += 0.05) widest = std::max(widest, axis_angle_deg(pan.camera(), pan.camera_at(t)));
+  CHECK(widest == Approx(6).margin(0.1));
+  // The camera turns about its own centre: the centre does not move.
+  CHECK((camera_centre(pan.camera_at(2)) - camera_centre(pan.camera())).norm() < 1e-6);
+  c.camera_motion = SceneConfig::shake;
+  const Scene shake(c);
+  double most = 0;
+  for (double t = 0; t < 2; t += 0.01) most = std::max(most, axis_angle_deg(shake.camera(), shake.camera_at(t)));
+  CHECK(most > 0.2);
+  CHECK(most < 1.5);
+  CHECK(shake.camera_image_speed() > pan.camera_image_speed());
+  // Labels are in the moving camera's frame.
+  SimSpec s;
+  s.character = "ben";
+  s.motion = "dance";
+  s.scene = c;
+  s.duration_s = 0.2;
+  Simulator sim(s);
+  const Label l = sim.label_at(0.1);
+  SimSpec rest = s;
+  rest.scene.camera_motion = SceneConfig::still;
+  const Label still_label = Simulator(rest).label_at(0.1);
+  CHECK((l.joints_mm[0] - still_label.joints_mm[0]).norm() > 1);  // the tremor moves the head in the camera frame
+  CHECK((l.joints_mm[0] - still_label.joints_mm[0]).norm() < 80);
 }
