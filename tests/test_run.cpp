@@ -378,6 +378,7 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   REQUIRE(b.code == 0);
   CHECK(contains(b.out, "beta sweep"));
   CHECK(contains(b.out, "chosen: beta "));
+  CHECK(contains(b.out, "the mask scores against their true quality"));
   CHECK(contains(run_cli({"weights", "inspect", d / "b.h5"}).out, "\"beta\""));
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "y.h5", "--beta", "0.9",
                  "--choose-beta"})

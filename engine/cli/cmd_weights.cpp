@@ -288,6 +288,11 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
     const run::BetaPoint pick = run::choose_beta(points, tol);
     out << std::defaultfloat << std::setprecision(3) << "beta sweep (stage 1 share of ticks, mask IoU):";
     for (const auto& p : points) out << "  " << p.beta << ": " << p.stage1_share << ", " << p.iou;
+    for (const auto& p : points)
+      if (p.beta > 1 && p.scored_masks)
+        out << "\nthe mask scores against their true quality (1 - mean |mask error|), stage 1 on every tick, "
+            << p.scored_masks << " masks: correlation " << p.score_quality_correlation << ", mean |score - quality| "
+            << p.score_quality_mae;
     out << "\nchosen: beta " << pick.beta << ", stage 1 on " << 100 * pick.stage1_share << "% of the ticks, IoU " << pick.iou
         << " (within " << tol << " of the best)\n";
     chosen = pick.beta;

@@ -19,6 +19,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
     pt.beta = beta;
     double inter = 0, uni = 0;
     std::uint64_t mask_runs = 0, with_events = 0;
+    double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, sad = 0;
     for (const std::string& path : recordings) {
       const camera::sim::RecordingInfo info = camera::sim::read_recording_info(path);
       if (!info.dancer) continue;
@@ -42,6 +43,22 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
         const std::uint8_t* tm = &truth[std::size_t(it - info.mask_t.begin() - std::ptrdiff_t(m0)) * std::size_t(W) * H];
         const std::vector<float>& pm = pipe.last_mask();
         if (pm.size() != std::size_t(mw) * mh) return;
+        // Stage 1 ran here: each future mask's score against its true quality.
+        if (p.mask_ran) {
+          const auto& masks = pipe.stored_masks();
+          const auto& scores = pipe.stored_scores();
+          const std::size_t here = std::size_t(it - info.mask_t.begin());
+          for (std::size_t k = 0; k < masks.size() && k < scores.size() && here + k < m1; ++k) {
+            const std::uint8_t* fm = &truth[(here + k - m0) * std::size_t(W) * H];
+            double wrong = 0;
+            for (int y = 0; y < mh; ++y)
+              for (int x = 0; x < mw; ++x)
+                wrong += (masks[k][std::size_t(y) * mw + x] > 0) != (fm[std::size_t(y * d + d / 2) * W + x * d + d / 2] != 0);
+            const double q = 1 - wrong / double(mw * mh), sc = scores[k];
+            sx += sc, sy += q, sxx += sc * sc, syy += q * q, sxy += sc * q, sad += std::abs(sc - q);
+            ++pt.scored_masks;
+          }
+        }
         for (int y = 0; y < mh; ++y)
           for (int x = 0; x < mw; ++x) {
             const bool pr = pm[std::size_t(y) * mw + x] > 0;
@@ -63,6 +80,12 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
       with_events += pipe.stats().ticks - pipe.stats().stale;
     }
     pt.iou = uni > 0 ? inter / uni : 0;
+    if (pt.scored_masks > 1) {
+      const double n = double(pt.scored_masks);
+      const double cov = sxy / n - sx / n * sy / n, vx = sxx / n - sx / n * sx / n, vy = syy / n - sy / n * sy / n;
+      pt.score_quality_correlation = vx > 0 && vy > 0 ? cov / std::sqrt(vx * vy) : 0;
+      pt.score_quality_mae = sad / n;
+    }
     pt.stage1_share = with_events ? double(mask_runs) / double(with_events) : 0;
     progress << "  beta " << beta << ": stage 1 on " << 100 * pt.stage1_share << "% of the ticks, mask IoU " << pt.iou << " ("
              << pt.ticks << " ticks)\n";

@@ -15,6 +15,11 @@ struct BetaPoint {
   double stage1_share = 0;  // of the ticks with events
   double iou = 0;           // mask in use against the true mask, pooled over ticks
   std::uint64_t ticks = 0;
+  // Where stage 1 ran and the future it predicted is within the recording: each mask's score
+  // against its true quality, 1 - mean |mask - true mask| (what the score is trained to say).
+  double score_quality_correlation = 0;  // Pearson
+  double score_quality_mae = 0;          // mean |score - quality|
+  std::uint64_t scored_masks = 0;
 };
 
 // One point per beta (in the order given), over at most `seconds` of each recording after

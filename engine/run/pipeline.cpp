@@ -344,6 +344,8 @@ const std::vector<float>& PosePipeline::last_mask() const {
   return impl_->masks.empty() ? none : impl_->masks[std::size_t(std::max(0, impl_->in_use))];
 }
 const layers::Act& PosePipeline::last_input() const { return impl_->last_in; }
+const std::vector<std::vector<float>>& PosePipeline::stored_masks() const { return impl_->masks; }
+const std::vector<float>& PosePipeline::stored_scores() const { return impl_->scores; }
 int PosePipeline::mask_downscale() const { return impl_->nets.cfg.downscale; }
 double PosePipeline::focal_px() const { return kFocalPx; }
 bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }

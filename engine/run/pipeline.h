@@ -87,6 +87,10 @@ class PosePipeline {
   // H x W at the sensor's size), the mask in use (the model's input size) and its downscale.
   const std::vector<float>& last_tore() const;
   const std::vector<float>& last_mask() const;
+  // Stage 1's latest run: its N masks (the current frame and N-1 future ones, 20 ms apart;
+  // binarised, the model's input size) and their scores.
+  const std::vector<std::vector<float>>& stored_masks() const;
+  const std::vector<float>& stored_scores() const;
   // Stage 2's input of the latest tick: the masked, downscaled TORE (one frame, blocked).
   const layers::Act& last_input() const;
   int mask_downscale() const;
