@@ -111,12 +111,16 @@ class RawReader : public EventReader {
   std::int64_t epoch_ = 0, last_raw_ = 0;
 };
 
-// EVT 2.0: 32-bit words; type in bits 31..28. CD events carry 6 timestamp LSBs, x and y;
-// EV_TIME_HIGH carries the upper 28 bits of the 34-bit timer.
-class Evt2Reader final : public RawReader {
+// EVT 2.0 and 2.1 share their grammar: a 4-bit word type on top; CD words (types 0 and 1, the
+// polarity) carry the 6 low bits of the time, EV_TIME_HIGH (type 8) the upper 28 bits of the
+// 34-bit timer; trigger (A), other (E) and continued (F) words carry no CD event. A Format
+// says how wide a word is and what its CD word holds.
+template <class Format>
+class Evt2FamilyReader final : public RawReader {
  public:
-  explicit Evt2Reader(const std::string& path, const RawHeader& h) : RawReader(path, h, 4) {
-    info_.format = "evt2";
+  using Word = typename Format::Word;
+  explicit Evt2FamilyReader(const std::string& path, const RawHeader& h) : RawReader(path, h, sizeof(Word)) {
+    info_.format = Format::kName;
     restart();  // not from RawReader: reset_state() is not callable there yet
   }
 
@@ -128,76 +132,17 @@ class Evt2Reader final : public RawReader {
   }
   void decode_block(const unsigned char* p, std::size_t n, std::vector<Event>& out) override {
     std::uint64_t no_time = 0, unknown = 0;
-    for (std::size_t i = 0; i < n; i += 4) {
-      const std::uint32_t w = load_le<std::uint32_t>(p + i);
-      switch (w >> 28) {
-        case 0x0:
-        case 0x1:
-          if (time_high_ < 0) {
-            ++no_time;
-            break;
-          }
-          out.push_back({time_high_ | ((w >> 22) & 0x3F), static_cast<std::uint16_t>((w >> 11) & 0x7FF),
-                         static_cast<std::uint16_t>(w & 0x7FF), static_cast<std::uint8_t>(w >> 28)});
-          break;
-        case 0x8:
-          time_high_ = unwrap(w & 0x0FFFFFFF, 28) << 6;
-          break;
-        case 0xA:  // external trigger
-        case 0xE:  // others
-        case 0xF:  // continued
-          break;
-        default:
-          ++unknown;
-      }
-    }
-    warn_skipped(block_offset_, "CD events before the first EV_TIME_HIGH (dropped)", no_time);
-    warn_skipped(block_offset_, "reserved EVT 2.0 word types (skipped)", unknown);
-  }
-
- private:
-  std::int64_t time_high_ = -1;
-};
-
-// EVT 2.1: 64-bit words, type in bits 63..60; CD words carry 6 timestamp LSBs, x aligned to
-// 32, y, and a 32-bit mask of which of the 32 pixels from x fired. Words are read as
-// little-endian 64-bit values (the layout Metavision writes to files).
-class Evt21Reader final : public RawReader {
- public:
-  explicit Evt21Reader(const std::string& path, const RawHeader& h) : RawReader(path, h, 8) {
-    info_.format = "evt21";
-    restart();  // not from RawReader: reset_state() is not callable there yet
-  }
-
- protected:
-  void reset_state() override {
-    have_time_ = false;
-    epoch_ = last_raw_ = 0;
-    time_high_ = -1;
-  }
-  void decode_block(const unsigned char* p, std::size_t n, std::vector<Event>& out) override {
-    std::uint64_t no_time = 0, unknown = 0;
-    for (std::size_t i = 0; i < n; i += 8) {
-      const std::uint64_t w = load_le<std::uint64_t>(p + i);
-      const unsigned type = static_cast<unsigned>(w >> 60);
+    for (std::size_t i = 0; i < n; i += sizeof(Word)) {
+      const Word w = load_le<Word>(p + i);
+      const unsigned type = static_cast<unsigned>(w >> (8 * sizeof(Word) - 4));
       switch (type) {
         case 0x0:
-        case 0x1: {
-          if (time_high_ < 0) {
-            ++no_time;
-            break;
-          }
-          const std::int64_t t = time_high_ | static_cast<std::int64_t>((w >> 54) & 0x3F);
-          const unsigned x0 = static_cast<unsigned>((w >> 43) & 0x7FF);
-          const auto y = static_cast<std::uint16_t>((w >> 32) & 0x7FF);
-          for (std::uint32_t mask = static_cast<std::uint32_t>(w); mask; mask &= mask - 1) {
-            const unsigned bit = static_cast<unsigned>(__builtin_ctz(mask));
-            out.push_back({t, static_cast<std::uint16_t>(x0 + bit), y, static_cast<std::uint8_t>(type)});
-          }
+        case 0x1:
+          if (time_high_ < 0) ++no_time;
+          else Format::cd(w, time_high_, static_cast<std::uint8_t>(type), out);
           break;
-        }
         case 0x8:
-          time_high_ = unwrap(static_cast<std::int64_t>((w >> 32) & 0x0FFFFFFF), 28) << 6;
+          time_high_ = unwrap(Format::time_high(w), 28) << 6;
           break;
         case 0xA:
         case 0xE:
@@ -207,12 +152,43 @@ class Evt21Reader final : public RawReader {
           ++unknown;
       }
     }
-    warn_skipped(block_offset_, "CD events before the first EVT_TIME_HIGH (dropped)", no_time);
-    warn_skipped(block_offset_, "reserved EVT 2.1 word types (skipped)", unknown);
+    warn_skipped(block_offset_, std::string("CD events before the first ") + Format::kTimeHigh + " (dropped)", no_time);
+    warn_skipped(block_offset_, std::string("reserved ") + Format::kLabel + " word types (skipped)", unknown);
   }
 
  private:
   std::int64_t time_high_ = -1;
+};
+
+// EVT 2.0: 32-bit words; a CD word holds 6 time bits, x and y of one pixel.
+struct Evt20 {
+  using Word = std::uint32_t;
+  static constexpr const char* kName = "evt2";
+  static constexpr const char* kLabel = "EVT 2.0";
+  static constexpr const char* kTimeHigh = "EV_TIME_HIGH";
+  static std::int64_t time_high(Word w) { return w & 0x0FFFFFFF; }
+  static void cd(Word w, std::int64_t time_high, std::uint8_t p, std::vector<Event>& out) {
+    out.push_back({time_high | ((w >> 22) & 0x3F), static_cast<std::uint16_t>((w >> 11) & 0x7FF),
+                   static_cast<std::uint16_t>(w & 0x7FF), p});
+  }
+};
+
+// EVT 2.1: 64-bit words (read as little-endian 64-bit values, the layout Metavision writes
+// to files); a CD word holds 6 time bits, x aligned to 32, y, and a 32-bit mask of which of
+// the 32 pixels from x fired.
+struct Evt21 {
+  using Word = std::uint64_t;
+  static constexpr const char* kName = "evt21";
+  static constexpr const char* kLabel = "EVT 2.1";
+  static constexpr const char* kTimeHigh = "EVT_TIME_HIGH";
+  static std::int64_t time_high(Word w) { return static_cast<std::int64_t>((w >> 32) & 0x0FFFFFFF); }
+  static void cd(Word w, std::int64_t time_high, std::uint8_t p, std::vector<Event>& out) {
+    const std::int64_t t = time_high | static_cast<std::int64_t>((w >> 54) & 0x3F);
+    const unsigned x0 = static_cast<unsigned>((w >> 43) & 0x7FF);
+    const auto y = static_cast<std::uint16_t>((w >> 32) & 0x7FF);
+    for (std::uint32_t mask = static_cast<std::uint32_t>(w); mask; mask &= mask - 1)
+      out.push_back({t, static_cast<std::uint16_t>(x0 + static_cast<unsigned>(__builtin_ctz(mask))), y, p});
+  }
 };
 
 // EVT 3.0: 16-bit words that update a decoder state (y, base x, polarity, 24-bit time);
@@ -344,8 +320,8 @@ RawHeader parse_raw_header(const std::string& path) {
 
 std::unique_ptr<EventReader> open_prophesee_raw(const std::string& path) {
   RawHeader h = parse_raw_header(path);
-  if (h.evt == "2.0" || h.evt == "2") return std::make_unique<Evt2Reader>(path, h);
-  if (h.evt == "2.1") return std::make_unique<Evt21Reader>(path, h);
+  if (h.evt == "2.0" || h.evt == "2") return std::make_unique<Evt2FamilyReader<Evt20>>(path, h);
+  if (h.evt == "2.1") return std::make_unique<Evt2FamilyReader<Evt21>>(path, h);
   if (h.evt == "3.0" || h.evt == "3") return std::make_unique<Evt3Reader>(path, h);
   throw FormatError(path, 0,
                     h.evt.empty() ? "Prophesee RAW header names no event format (no `% evt` or `% format` line)"
