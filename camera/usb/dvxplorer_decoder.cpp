@@ -3,20 +3,10 @@
 namespace yelan::camera::usb {
 
 DvxplorerDecoder::DvxplorerDecoder(std::uint16_t width, std::uint16_t height, bool invert_xy)
-    : width_(invert_xy ? height : width), height_(invert_xy ? width : height), invert_xy_(invert_xy) {}
-
-void DvxplorerDecoder::feed(std::span<const std::uint8_t> bytes, std::vector<Event>& out) {
-  stats_.bytes += bytes.size();
-  splitter_.split(bytes, [&](std::uint16_t w) { decode_word(w, out); });
-}
+    : WordDecoder(width, height, invert_xy) {}
 
 void DvxplorerDecoder::decode_word(std::uint16_t word, std::vector<Event>& out) {
-  ++stats_.words;
-  if (word & 0x8000) {
-    ++stats_.timestamp_words;
-    if (!clock_.on_timestamp(word & 0x7FFF)) ++stats_.non_monotonic;
-    return;
-  }
+  if (timestamp_word(word)) return;
   const std::uint16_t code = (word >> 12) & 0x7;
   const std::uint16_t data = word & 0x0FFF;
   switch (code) {
