@@ -4,7 +4,8 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|train|train-mask|train-pose|train-pose-small|combine|all]   (default: all)
+#   benchmarks/training/campaign.sh [dataset|train|train-mask|train-pose|train-pose-small|save|restore|combine|all]
+#   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
 set -euo pipefail
@@ -46,6 +47,28 @@ case "$what" in
   # 0.125 net scored 243 mm on its own training recordings (above the per-view floor of
   # 173 mm on the same frames): it underfits, so the next step is width, not data.
   train-pose-small) CFG=weights_tools/configs/small.json train pose pose-small "${POSE_SMALL_STEPS:-8000}" --occlusion ;;
+  # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
+  # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
+  save)
+    for run in pose-p0125 pose-small mask-p0125; do
+      [ -d "$RUNS/$run" ] || continue
+      mkdir -p "models/campaign/$run"
+      cp "$RUNS/$run/run.json" "$RUNS/$run/log.csv" "models/campaign/$run/"
+      [ -f "$RUNS/$run.out" ] && cp "$RUNS/$run.out" "models/campaign/$run/train.out"
+      size=$(( $(stat -c %s "$RUNS/$run/checkpoint.h5") + $(stat -c %s "$RUNS/$run/checkpoint.state") ))
+      if [ "$size" -le $((8 << 20)) ]; then
+        cp "$RUNS/$run/checkpoint.h5" "$RUNS/$run/checkpoint.state" "models/campaign/$run/"
+      else
+        echo "$run: checkpoint and state are $((size >> 20)) MiB: not copied (it resumes from $RUNS on this machine)" >&2
+      fi
+    done ;;
+  restore)
+    for d in models/campaign/*/; do
+      run=$(basename "$d")
+      mkdir -p "$RUNS/$run"
+      [ -f "$RUNS/$run/checkpoint.state" ] && { echo "$run: $RUNS/$run has a checkpoint already; kept" >&2; continue; }
+      cp "$d"* "$RUNS/$run/"
+    done ;;
   combine)
     "$Y" weights combine --mask "$RUNS/mask-p0125/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;
@@ -53,5 +76,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|train|train-mask|train-pose|train-pose-small|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|train|train-mask|train-pose|train-pose-small|save|restore|combine|all]" >&2; exit 2 ;;
 esac

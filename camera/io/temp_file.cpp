@@ -43,11 +43,44 @@ void unregister(int slot) {
   g_claimed[std::size_t(slot)].store(false);
 }
 
+// A handler on one thread must not remove the files while another thread is between
+// registering a name and creating the file (it would create it after the removal, just
+// before the process dies). The two sides meet as in Dekker's algorithm: the creator counts
+// itself in and then looks for a dying process; the handler marks the process dying and then
+// waits for the creators counted in. Sequentially consistent atomics make one of them see
+// the other. The creating thread itself, interrupted by the handler, is not waited for.
+std::atomic<int> g_creating{0};
+std::atomic<bool> g_dying{false};
+thread_local bool t_creating = false;
+
 void on_signal(int sig) {
+  g_dying.store(true);
+  const int self = t_creating ? 1 : 0;
+  while (g_creating.load() > self) {
+  }
   remove_temp_files();
   ::signal(sig, SIG_DFL);
   ::raise(sig);
 }
+
+// Counts the calling thread in as creating a temporary file; a process already dying by a
+// signal waits here for the end instead (the handler is removing the files).
+class Creating {
+ public:
+  Creating() {
+    g_creating.fetch_add(1);
+    t_creating = true;
+    if (g_dying.load()) {
+      g_creating.fetch_sub(1);
+      t_creating = false;
+      for (;;) ::pause();
+    }
+  }
+  ~Creating() {
+    t_creating = false;
+    g_creating.fetch_sub(1);
+  }
+};
 
 // A random name the handler may remove even before the file exists: registering first and
 // creating second leaves no moment where a signal (delivered to any thread) finds a file of
@@ -67,6 +100,7 @@ TempFile::TempFile(std::string final_path) : final_(std::move(final_path)) {
   const std::string stem = final_ + ".tmp-" + std::to_string(long(::getpid())) + "-";
   for (int attempt = 0; attempt < 100; ++attempt) {
     std::string name = stem + random_suffix();
+    const Creating creating;
     const int slot = register_path(name);
     // open's mode passes through the umask: an output gets what any new file would.
     const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0666);
