@@ -116,47 +116,50 @@ struct Blocked {
 std::size_t x_floats(const ConvShape& s) { return std::size_t(s.n) * s.icb() * s.ih * s.iw * kBlock; }
 std::size_t y_floats(const ConvShape& s) { return std::size_t(s.n) * s.ocb() * s.oh() * s.ow() * kBlock; }
 
-void fwd_scalar(const ConvShape& s, const float* x, const float* w, const float* bias, float* y) {
-  const Blocked b{s};
-  std::memset(y, 0, y_floats(s) * sizeof(float));
+// The reference's one loop nest: out(n, o, oh, ow) once per output, then tap(i, ih, iw, kh,
+// kw) for every input channel and kernel tap that lands inside the image, in plain order.
+template <class Out, class Tap>
+void for_each_output_tap(const ConvShape& s, Out&& out, Tap&& tap) {
   for (int n = 0; n < s.n; ++n)
     for (int o = 0; o < s.oc; ++o)
       for (int oh = 0; oh < s.oh(); ++oh)
         for (int ow = 0; ow < s.ow(); ++ow) {
-          float acc = bias ? bias[o] : 0.f;
+          out(n, o, oh, ow);
           for (int i = 0; i < s.ic; ++i)
             for (int kh = 0; kh < s.kh; ++kh) {
               const int ih = oh * s.stride - s.pad_h + kh;
               if (ih < 0 || ih >= s.ih) continue;
               for (int kw = 0; kw < s.kw; ++kw) {
                 const int iw = ow * s.stride - s.pad_w + kw;
-                if (iw < 0 || iw >= s.iw) continue;
-                acc += x[b.x(n, i, ih, iw)] * w[b.wf(o, i, kh, kw)];
+                if (iw >= 0 && iw < s.iw) tap(i, ih, iw, kh, kw);
               }
             }
-          y[b.y(n, o, oh, ow)] = acc;
         }
+}
+
+void fwd_scalar(const ConvShape& s, const float* x, const float* w, const float* bias, float* y) {
+  const Blocked b{s};
+  std::memset(y, 0, y_floats(s) * sizeof(float));
+  int n = 0, o = 0;
+  float* dst = nullptr;
+  for_each_output_tap(
+      s,
+      [&](int n_, int o_, int oh, int ow) {
+        n = n_, o = o_;
+        dst = &y[b.y(n, o, oh, ow)];
+        *dst = bias ? bias[o] : 0.f;
+      },
+      [&](int i, int ih, int iw, int kh, int kw) { *dst += x[b.x(n, i, ih, iw)] * w[b.wf(o, i, kh, kw)]; });
 }
 
 void bwd_data_scalar(const ConvShape& s, const float* dy, const float* w, float* dx) {
   const Blocked b{s};
   std::memset(dx, 0, x_floats(s) * sizeof(float));
-  for (int n = 0; n < s.n; ++n)
-    for (int o = 0; o < s.oc; ++o)
-      for (int oh = 0; oh < s.oh(); ++oh)
-        for (int ow = 0; ow < s.ow(); ++ow) {
-          const float g = dy[b.y(n, o, oh, ow)];
-          for (int i = 0; i < s.ic; ++i)
-            for (int kh = 0; kh < s.kh; ++kh) {
-              const int ih = oh * s.stride - s.pad_h + kh;
-              if (ih < 0 || ih >= s.ih) continue;
-              for (int kw = 0; kw < s.kw; ++kw) {
-                const int iw = ow * s.stride - s.pad_w + kw;
-                if (iw < 0 || iw >= s.iw) continue;
-                dx[b.x(n, i, ih, iw)] += g * w[b.wb(o, i, kh, kw)];
-              }
-            }
-        }
+  int n = 0, o = 0;
+  float g = 0;
+  for_each_output_tap(
+      s, [&](int n_, int o_, int oh, int ow) { n = n_, o = o_, g = dy[b.y(n, o, oh, ow)]; },
+      [&](int i, int ih, int iw, int kh, int kw) { dx[b.x(n, i, ih, iw)] += g * w[b.wb(o, i, kh, kw)]; });
 }
 
 void bwd_weights_scalar(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias) {
@@ -164,23 +167,15 @@ void bwd_weights_scalar(const ConvShape& s, const float* x, const float* dy, flo
   std::memset(dw, 0, conv_weight_floats(s) * sizeof(float));
   if (dbias) std::memset(dbias, 0, std::size_t(s.ocb()) * kBlock * sizeof(float));
   std::vector<double> bias_sum(s.oc, 0.0);
-  for (int n = 0; n < s.n; ++n)
-    for (int o = 0; o < s.oc; ++o)
-      for (int oh = 0; oh < s.oh(); ++oh)
-        for (int ow = 0; ow < s.ow(); ++ow) {
-          const float g = dy[b.y(n, o, oh, ow)];
-          bias_sum[o] += g;
-          for (int i = 0; i < s.ic; ++i)
-            for (int kh = 0; kh < s.kh; ++kh) {
-              const int ih = oh * s.stride - s.pad_h + kh;
-              if (ih < 0 || ih >= s.ih) continue;
-              for (int kw = 0; kw < s.kw; ++kw) {
-                const int iw = ow * s.stride - s.pad_w + kw;
-                if (iw < 0 || iw >= s.iw) continue;
-                dw[b.wf(o, i, kh, kw)] += g * x[b.x(n, i, ih, iw)];
-              }
-            }
-        }
+  int n = 0, o = 0;
+  float g = 0;
+  for_each_output_tap(
+      s,
+      [&](int n_, int o_, int oh, int ow) {
+        n = n_, o = o_, g = dy[b.y(n, o, oh, ow)];
+        bias_sum[o] += g;
+      },
+      [&](int i, int ih, int iw, int kh, int kw) { dw[b.wf(o, i, kh, kw)] += g * x[b.x(n, i, ih, iw)]; });
   if (dbias)
     for (int o = 0; o < s.oc; ++o) dbias[o] = float(bias_sum[o]);
 }
@@ -280,23 +275,6 @@ void deconv_bwd_weights(const ConvKernels& k, const DeconvShape& s, const float*
 
 const ConvKernels conv_scalar{Isa::scalar, fwd_scalar, bwd_data_scalar, bwd_weights_scalar, fwd_winograd_scalar};
 
-#if defined(__x86_64__)
-extern const ConvKernels conv_avx2;
-extern const ConvKernels conv_avx512;
-#elif defined(__aarch64__)
-extern const ConvKernels conv_neon;
-#endif
-
-const ConvKernels& conv_kernels(Isa isa) {
-  Variants<ConvKernels> v;
-  v.scalar = &conv_scalar;
-#if defined(__x86_64__)
-  v.avx2 = &conv_avx2;
-  v.avx512 = &conv_avx512;
-#elif defined(__aarch64__)
-  v.neon = &conv_neon;
-#endif
-  return select_variant(v, isa);
-}
+YELAN_KERNEL_DISPATCH(ConvKernels, conv)
 
 }  // namespace yelan::kernels

@@ -53,7 +53,7 @@ struct ConvKernels {
   // Overwrites both.
   void (*bwd_weights)(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias);
   // Inference only, 3x3 stride 1 (winograd_applicable): Winograd F(4x4, 3x3) with weights
-  // from pack_winograd_weights. Same contract as fwd; error bound in tests/test_conv.cpp.
+  // from pack_winograd_weights. Same contract as fwd; error bound in tests/kernels/test_conv.cpp.
   void (*fwd_winograd)(const ConvShape& s, const float* x, const float* w_wino, const float* bias, float* y);
 };
 

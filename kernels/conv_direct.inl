@@ -1,22 +1,10 @@
-// The register-blocked direct convolution of kernels/conv.h, written once with GCC vector
-// extensions and compiled per ISA: each variant file defines CONV_VL (floats per native
-// vector: 16 AVX-512, 8 AVX2, 4 NEON), CONV_R (pixels per tile), CONV_NB (16-channel
-// output blocks per tile) and CONV_DW_CT (input lanes per backward-weights pass) to fit
-// its register file, then includes this inside an anonymous namespace. A 16-channel block
-// is CONV_NV = 16 / CONV_VL native vectors, so the compiler never sees a vector wider
-// than the hardware's.
-//
-// Needs: <algorithm>, <array>, <cstddef>, <utility>, kernels/conv.h; -ffp-contract=fast
-// so that `acc += x * w` is one FMA.
+// The register-blocked direct convolution of kernels/conv.h, over the vectors of
+// kernels/simd.h; part of conv_simd.cpp, which sizes the tile to the ISA's register file
+// (CONV_R pixels x CONV_NB 16-channel output blocks; CONV_DW_CT input lanes per
+// backward-weights pass). A 16-channel block is CONV_NV = 16 / VL native vectors, so the
+// compiler never sees a vector wider than the hardware's.
 
-constexpr int CONV_NV = kBlock / CONV_VL;
-typedef float vn __attribute__((vector_size(CONV_VL * 4)));
-// Memory accesses go through an under-aligned alias: callers' buffers need only float
-// alignment (unaligned loads cost nothing extra on aligned data).
-typedef float vnu __attribute__((vector_size(CONV_VL * 4), aligned(4)));
-
-inline vn loadv(const float* p) { return *reinterpret_cast<const vnu*>(p); }
-inline void storev(float* p, vn v) { *reinterpret_cast<vnu*>(p) = v; }
+constexpr int CONV_NV = kBlock / VL;
 
 struct Tap {
   std::ptrdiff_t src, w;  // offsets in floats from the tile's source and weight bases
@@ -38,10 +26,10 @@ struct TileArgs {
 
 // Source lane c of one tap: R broadcasts times NQ weight vectors.
 template <int R, int NQ>
-inline void tile_lane(const TileArgs& a, const float* st, const float* wt, int c, vn (&acc)[R][NQ]) {
-  vn wv[NQ];
+inline void tile_lane(const TileArgs& a, const float* st, const float* wt, int c, vf (&acc)[R][NQ]) {
+  vf wv[NQ];
 #pragma GCC unroll 16
-  for (int q = 0; q < NQ; ++q) wv[q] = loadv(wt + (q / CONV_NV) * a.w_ob + c * kBlock + (q % CONV_NV) * CONV_VL);
+  for (int q = 0; q < NQ; ++q) wv[q] = loadf(wt + (q / CONV_NV) * a.w_ob + c * kBlock + (q % CONV_NV) * VL);
 #pragma GCC unroll 16
   for (int r = 0; r < R; ++r) {
     const float xv = st[r * a.src_r + c];
@@ -53,10 +41,10 @@ inline void tile_lane(const TileArgs& a, const float* st, const float* wt, int c
 template <int R, int NB>
 void tile(const TileArgs& a) {
   constexpr int NQ = NB * CONV_NV;  // native vectors across the tile's output channels
-  vn acc[R][NQ];
+  vf acc[R][NQ];
 #pragma GCC unroll 16
   for (int q = 0; q < NQ; ++q) {
-    const vn b = a.bias ? loadv(a.bias + (q / CONV_NV) * kBlock + (q % CONV_NV) * CONV_VL) : vn{};
+    const vf b = a.bias ? loadf(a.bias + (q / CONV_NV) * kBlock + (q % CONV_NV) * VL) : vf{};
 #pragma GCC unroll 16
     for (int r = 0; r < R; ++r) acc[r][q] = b;
   }
@@ -79,7 +67,7 @@ void tile(const TileArgs& a) {
   for (int r = 0; r < R; ++r)
 #pragma GCC unroll 16
     for (int q = 0; q < NQ; ++q)
-      storev(a.dst + r * a.dst_r + (q / CONV_NV) * a.dst_ob + (q % CONV_NV) * CONV_VL, acc[r][q]);
+      storef(a.dst + r * a.dst_r + (q / CONV_NV) * a.dst_ob + (q % CONV_NV) * VL, acc[r][q]);
 }
 
 using TileFn = void (*)(const TileArgs&);
@@ -258,11 +246,11 @@ void dw_pass(const ConvShape& s, const float* x, const float* dy, int ob, int cb
   const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb(), st = s.stride;
   const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
   const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
-  vn acc[CT][CONV_NV];
+  vf acc[CT][CONV_NV];
 #pragma GCC unroll 16
   for (int c = 0; c < CT; ++c)
 #pragma GCC unroll 4
-    for (int q = 0; q < CONV_NV; ++q) acc[c][q] = vn{};
+    for (int q = 0; q < CONV_NV; ++q) acc[c][q] = vf{};
   const int ow_lo = std::max(0, ceil_div(s.pad_w - kw, st));
   const int ow_hi = std::min(OW, floor_div(s.iw - 1 + s.pad_w - kw, st) + 1);
   for (int n = 0; n < s.n; ++n)
@@ -272,9 +260,9 @@ void dw_pass(const ConvShape& s, const float* x, const float* dy, int ob, int cb
       const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
       const float* xr = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane + std::ptrdiff_t(ih) * s.iw * kBlock + c0;
       for (int ow = ow_lo; ow < ow_hi; ++ow) {
-        vn d[CONV_NV];
+        vf d[CONV_NV];
 #pragma GCC unroll 4
-        for (int q = 0; q < CONV_NV; ++q) d[q] = loadv(g + std::ptrdiff_t(ow) * kBlock + q * CONV_VL);
+        for (int q = 0; q < CONV_NV; ++q) d[q] = loadf(g + std::ptrdiff_t(ow) * kBlock + q * VL);
         const float* xp = xr + std::ptrdiff_t(ow * st - s.pad_w + kw) * kBlock;
 #pragma GCC unroll 16
         for (int c = 0; c < CT; ++c)
@@ -285,7 +273,7 @@ void dw_pass(const ConvShape& s, const float* x, const float* dy, int ob, int cb
 #pragma GCC unroll 16
   for (int c = 0; c < CT; ++c)
 #pragma GCC unroll 4
-    for (int q = 0; q < CONV_NV; ++q) storev(out + (c0 + c) * kBlock + q * CONV_VL, acc[c][q]);
+    for (int q = 0; q < CONV_NV; ++q) storef(out + (c0 + c) * kBlock + q * VL, acc[c][q]);
 }
 
 void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias) {
@@ -310,11 +298,11 @@ void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float
         for (int n = 0; n < s.n; ++n) {
           const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
           for (std::ptrdiff_t p0 = 0; p0 < y_plane; p0 += 256 * kBlock) {
-            vn acc[CONV_NV] = {};
+            vf acc[CONV_NV] = {};
             for (std::ptrdiff_t p = p0; p < std::min(y_plane, p0 + 256 * kBlock); p += kBlock)
-              for (int q = 0; q < CONV_NV; ++q) acc[q] += loadv(g + p + q * CONV_VL);
+              for (int q = 0; q < CONV_NV; ++q) acc[q] += loadf(g + p + q * VL);
             for (int q = 0; q < CONV_NV; ++q)
-              for (int l = 0; l < CONV_VL; ++l) total[q * CONV_VL + l] += acc[q][l];
+              for (int l = 0; l < VL; ++l) total[q * VL + l] += acc[q][l];
           }
         }
         for (int l = 0; l < kBlock; ++l) dbias[ob * kBlock + l] = float(total[l]);

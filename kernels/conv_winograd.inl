@@ -6,8 +6,8 @@
 constexpr int kWinoChunk = 48;
 
 // B^T d for six vectors (one column or row of a 6x6 tile).
-inline void wino_bt(const vn d[6], vn o[6]) {
-  const vn four = vn{} + 4.f, five = vn{} + 5.f, two = vn{} + 2.f;
+inline void wino_bt(const vf d[6], vf o[6]) {
+  const vf four = vf{} + 4.f, five = vf{} + 5.f, two = vf{} + 2.f;
   o[0] = four * d[0] - five * d[2] + d[4];
   o[1] = d[3] + d[4] - four * (d[1] + d[2]);
   o[2] = four * (d[1] - d[2]) + d[4] - d[3];
@@ -17,12 +17,12 @@ inline void wino_bt(const vn d[6], vn o[6]) {
 }
 
 // A^T m: six vectors to four.
-inline void wino_at(const vn m[6], vn o[4]) {
-  const vn a = m[1] + m[2], b = m[1] - m[2], c = m[3] + m[4], d = m[3] - m[4];
+inline void wino_at(const vf m[6], vf o[4]) {
+  const vf a = m[1] + m[2], b = m[1] - m[2], c = m[3] + m[4], d = m[3] - m[4];
   o[0] = m[0] + a + c;
-  o[1] = b + (vn{} + 2.f) * d;
-  o[2] = a + (vn{} + 4.f) * c;
-  o[3] = b + (vn{} + 8.f) * d + m[5];
+  o[1] = b + (vf{} + 2.f) * d;
+  o[2] = a + (vf{} + 4.f) * c;
+  o[3] = b + (vf{} + 8.f) * d + m[5];
 }
 
 void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
@@ -46,25 +46,25 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
           for (int t = 0; t < tc; ++t) {
             const int ih0 = (t0 + t) / TW * 4 - s.pad_h, iw0 = (t0 + t) % TW * 4 - s.pad_w;
             for (int q = 0; q < CONV_NV; ++q) {
-              vn d[6][6], r[6][6];
+              vf d[6][6], r[6][6];
               for (int i = 0; i < 6; ++i)
                 for (int j = 0; j < 6; ++j) {
                   const int ih = ih0 + i, iw = iw0 + j;
                   d[i][j] = ih >= 0 && ih < s.ih && iw >= 0 && iw < s.iw
-                                ? loadv(xb + (std::ptrdiff_t(ih) * s.iw + iw) * kBlock + q * CONV_VL)
-                                : vn{};
+                                ? loadf(xb + (std::ptrdiff_t(ih) * s.iw + iw) * kBlock + q * VL)
+                                : vf{};
                 }
               for (int j = 0; j < 6; ++j) {  // columns: r[.][j] = B^T d[.][j]
-                vn col[6], out[6];
+                vf col[6], out[6];
                 for (int i = 0; i < 6; ++i) col[i] = d[i][j];
                 wino_bt(col, out);
                 for (int i = 0; i < 6; ++i) r[i][j] = out[i];
               }
               for (int i = 0; i < 6; ++i) {  // rows: (B^T d) B
-                vn out[6];
+                vf out[6];
                 wino_bt(r[i], out);
                 for (int j = 0; j < 6; ++j)
-                  storev(V + ((std::ptrdiff_t(i * 6 + j) * ICB + cb) * kWinoChunk + t) * kBlock + q * CONV_VL, out[j]);
+                  storef(V + ((std::ptrdiff_t(i * 6 + j) * ICB + cb) * kWinoChunk + t) * kBlock + q * VL, out[j]);
               }
             }
           }
@@ -100,20 +100,20 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
           for (int t = 0; t < tc; ++t) {
             const int oh0 = (t0 + t) / TW * 4, ow0 = (t0 + t) % TW * 4;
             for (int q = 0; q < CONV_NV; ++q) {
-              const vn b = bias ? loadv(bias + ob * kBlock + q * CONV_VL) : vn{};
-              vn r[4][6];
+              const vf b = bias ? loadf(bias + ob * kBlock + q * VL) : vf{};
+              vf r[4][6];
               for (int j = 0; j < 6; ++j) {
-                vn col[6], out[4];
+                vf col[6], out[4];
                 for (int i = 0; i < 6; ++i)
-                  col[i] = loadv(M + ((std::ptrdiff_t(i * 6 + j) * OCB + ob) * kWinoChunk + t) * kBlock + q * CONV_VL);
+                  col[i] = loadf(M + ((std::ptrdiff_t(i * 6 + j) * OCB + ob) * kWinoChunk + t) * kBlock + q * VL);
                 wino_at(col, out);
                 for (int i = 0; i < 4; ++i) r[i][j] = out[i];
               }
               for (int i = 0; i < 4 && oh0 + i < OH; ++i) {
-                vn out[4];
+                vf out[4];
                 wino_at(r[i], out);
                 for (int j = 0; j < 4 && ow0 + j < OW; ++j)
-                  storev(yb + (std::ptrdiff_t(oh0 + i) * OW + ow0 + j) * kBlock + q * CONV_VL, out[j] + b);
+                  storef(yb + (std::ptrdiff_t(oh0 + i) * OW + ow0 + j) * kBlock + q * VL, out[j] + b);
               }
             }
           }

@@ -28,21 +28,26 @@ const Table& select_variant(const Variants<Table>& v, Isa isa) {
 }  // namespace yelan::kernels
 
 // Defines `const Table& <family>_kernels(Isa)` over the scalar table `<family>_scalar` and
-// the ISA variants `<family>_avx2`, `<family>_avx512` (x86-64) or `<family>_neon` (aarch64).
+// the ISA variants `<family>_avx2`, `<family>_avx512` (x86-64) or `<family>_neon` (aarch64)
+// that <family>_simd.cpp defines per ISA (YELAN_VARIANT in variant.h). Usable in any namespace.
 #if defined(__x86_64__)
-#define YELAN_KERNEL_DISPATCH(Table, family)                            \
-  extern const Table family##_avx2;                                     \
-  extern const Table family##_avx512;                                   \
-  const Table& family##_kernels(Isa isa) {                              \
-    return select_variant(Variants<Table>{&family##_scalar, &family##_avx2, &family##_avx512, nullptr}, isa); \
+#define YELAN_KERNEL_DISPATCH(Table, family)                                                       \
+  extern const Table family##_avx2;                                                                \
+  extern const Table family##_avx512;                                                              \
+  const Table& family##_kernels(::yelan::kernels::Isa isa) {                                       \
+    return ::yelan::kernels::select_variant(                                                       \
+        ::yelan::kernels::Variants<Table>{&family##_scalar, &family##_avx2, &family##_avx512, nullptr}, isa); \
   }
 #elif defined(__aarch64__)
-#define YELAN_KERNEL_DISPATCH(Table, family)                            \
-  extern const Table family##_neon;                                     \
-  const Table& family##_kernels(Isa isa) {                              \
-    return select_variant(Variants<Table>{&family##_scalar, nullptr, nullptr, &family##_neon}, isa); \
+#define YELAN_KERNEL_DISPATCH(Table, family)                                                       \
+  extern const Table family##_neon;                                                                \
+  const Table& family##_kernels(::yelan::kernels::Isa isa) {                                       \
+    return ::yelan::kernels::select_variant(                                                       \
+        ::yelan::kernels::Variants<Table>{&family##_scalar, nullptr, nullptr, &family##_neon}, isa); \
   }
 #else
-#define YELAN_KERNEL_DISPATCH(Table, family) \
-  const Table& family##_kernels(Isa isa) { return select_variant(Variants<Table>{&family##_scalar}, isa); }
+#define YELAN_KERNEL_DISPATCH(Table, family)                                                       \
+  const Table& family##_kernels(::yelan::kernels::Isa isa) {                                       \
+    return ::yelan::kernels::select_variant(::yelan::kernels::Variants<Table>{&family##_scalar}, isa); \
+  }
 #endif

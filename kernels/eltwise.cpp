@@ -27,23 +27,6 @@ float dot(const float* a, const float* b, std::size_t n) {
 
 const EltwiseKernels eltwise_scalar{Isa::scalar, add, axpy, relu, relu_backward, dot};
 
-#if defined(__x86_64__)
-extern const EltwiseKernels eltwise_avx2;
-extern const EltwiseKernels eltwise_avx512;
-#elif defined(__aarch64__)
-extern const EltwiseKernels eltwise_neon;
-#endif
-
-const EltwiseKernels& eltwise_kernels(Isa isa) {
-  Variants<EltwiseKernels> v;
-  v.scalar = &eltwise_scalar;
-#if defined(__x86_64__)
-  v.avx2 = &eltwise_avx2;
-  v.avx512 = &eltwise_avx512;
-#elif defined(__aarch64__)
-  v.neon = &eltwise_neon;
-#endif
-  return select_variant(v, isa);
-}
+YELAN_KERNEL_DISPATCH(EltwiseKernels, eltwise)
 
 }  // namespace yelan::kernels

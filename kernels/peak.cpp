@@ -19,23 +19,6 @@ float fma_loop_scalar(std::int64_t iterations, float seed) {
 
 const PeakKernels peak_scalar{Isa::scalar, 8 * 2, fma_loop_scalar};
 
-#if defined(__x86_64__)
-extern const PeakKernels peak_avx2;
-extern const PeakKernels peak_avx512;
-#elif defined(__aarch64__)
-extern const PeakKernels peak_neon;
-#endif
-
-const PeakKernels& peak_kernels(Isa isa) {
-  Variants<PeakKernels> v;
-  v.scalar = &peak_scalar;
-#if defined(__x86_64__)
-  v.avx2 = &peak_avx2;
-  v.avx512 = &peak_avx512;
-#elif defined(__aarch64__)
-  v.neon = &peak_neon;
-#endif
-  return select_variant(v, isa);
-}
+YELAN_KERNEL_DISPATCH(PeakKernels, peak)
 
 }  // namespace yelan::kernels

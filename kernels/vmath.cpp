@@ -21,23 +21,6 @@ float tanh_ref(float v) { return std::tanh(v); }
 const VmathKernels vmath_scalar{Isa::scalar, apply<exp_ref>, apply<log_ref>, apply<sigmoid_ref>,
                                 apply<tanh_ref>};
 
-#if defined(__x86_64__)
-extern const VmathKernels vmath_avx2;
-extern const VmathKernels vmath_avx512;
-#elif defined(__aarch64__)
-extern const VmathKernels vmath_neon;
-#endif
-
-const VmathKernels& vmath_kernels(Isa isa) {
-  Variants<VmathKernels> v;
-  v.scalar = &vmath_scalar;
-#if defined(__x86_64__)
-  v.avx2 = &vmath_avx2;
-  v.avx512 = &vmath_avx512;
-#elif defined(__aarch64__)
-  v.neon = &vmath_neon;
-#endif
-  return select_variant(v, isa);
-}
+YELAN_KERNEL_DISPATCH(VmathKernels, vmath)
 
 }  // namespace yelan::kernels

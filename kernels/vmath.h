@@ -1,6 +1,6 @@
 // Element-wise exp, log, sigmoid, tanh over arrays. The scalar table calls the C library
-// (the reference); SIMD variants use kernels/vmath_vec.inl, whose error bounds are stated
-// there and measured by tests/test_vmath.cpp.
+// (the reference); SIMD variants use the vector math of kernels/simd.h, whose error bounds are stated
+// there and measured by tests/kernels/test_vmath.cpp.
 #pragma once
 #include <cstddef>
 

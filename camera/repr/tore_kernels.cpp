@@ -5,21 +5,8 @@
 
 namespace yelan::camera {
 
-const ToreKernels tore_kernels_scalar{kernels::Isa::scalar, tore_yelan_impl, tore_baldwin_impl};
+const ToreKernels tore_scalar{kernels::Isa::scalar, tore_yelan_impl, tore_baldwin_impl};
 
-#if defined(__x86_64__)
-extern const ToreKernels tore_kernels_avx2;
-extern const ToreKernels tore_kernels_avx512;
-#endif
-
-const ToreKernels& tore_kernels(kernels::Isa isa) {
-  kernels::Variants<ToreKernels> v;
-  v.scalar = &tore_kernels_scalar;
-#if defined(__x86_64__)
-  v.avx2 = &tore_kernels_avx2;
-  v.avx512 = &tore_kernels_avx512;
-#endif
-  return kernels::select_variant(v, isa);
-}
+YELAN_KERNEL_DISPATCH(ToreKernels, tore)
 
 }  // namespace yelan::camera

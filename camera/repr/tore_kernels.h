@@ -1,5 +1,5 @@
 // Element-wise TORE read-out kernels over a run of raw FIFO timestamps, one variant per
-// ISA (tore_kernels.cpp: baseline; tore_kernels_avx2.cpp, tore_kernels_avx512.cpp: the
+// ISA (tore_kernels.cpp: baseline; tore_kernels_simd.cpp, compiled once per ISA: the
 // same source compiled with wider vectors). Chosen by kernels::active_isa().
 #pragma once
 #include <cstddef>

@@ -1,5 +1,15 @@
 // Pooling on native vectors: the 16 lanes of a pixel are independent channels, so a max
 // over the window is a vector max and the argmax a vector select of pixel indices.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "kernels/pool.h"
+#include "kernels/simd.h"
+
+namespace yelan::kernels::YELAN_VARIANT_ISA {
+namespace {
 
 constexpr int NQ = 16 / VL;
 
@@ -67,4 +77,9 @@ void simd_avg_bwd(int planes, std::size_t pixels, const float* dy, float* dx) {
     }
 }
 
-constexpr PoolKernels simd_table(Isa isa) { return {isa, simd_max_fwd, simd_max_bwd, simd_avg_fwd, simd_avg_bwd}; }
+constexpr PoolKernels kTable{Isa::YELAN_VARIANT_ISA, simd_max_fwd, simd_max_bwd, simd_avg_fwd, simd_avg_bwd};
+
+}  // namespace
+}  // namespace yelan::kernels::YELAN_VARIANT_ISA
+
+YELAN_EXPORT_KERNELS(PoolKernels, pool)

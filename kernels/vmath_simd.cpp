@@ -1,4 +1,12 @@
-// Array drivers of the vector math functions (after simd_types.inl and vmath_vec.inl).
+// exp, log, sigmoid and tanh over arrays, on the vector math of kernels/simd.h.
+#include <cstddef>
+
+#include "kernels/vmath.h"
+#include "kernels/simd.h"
+
+namespace yelan::kernels::YELAN_VARIANT_ISA {
+namespace {
+
 // The tail goes through a zero-padded vector, so every element gets the same formula.
 template <vf (*F)(vf)>
 void apply(const float* x, float* y, std::size_t n) {
@@ -11,3 +19,10 @@ void apply(const float* x, float* y, std::size_t n) {
     for (std::size_t k = 0; i + k < n; ++k) y[i + k] = out[k];
   }
 }
+
+constexpr VmathKernels kTable{Isa::YELAN_VARIANT_ISA, apply<vexp>, apply<vlog>, apply<vsigmoid>, apply<vtanh>};
+
+}  // namespace
+}  // namespace yelan::kernels::YELAN_VARIANT_ISA
+
+YELAN_EXPORT_KERNELS(VmathKernels, vmath)

@@ -2,6 +2,16 @@
 // per-channel statistics are plain vector sums over pixels. Sums run in float over chunks
 // of 256 pixels and the chunk sums add up in double, so accuracy does not fall with the
 // image size.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "kernels/bn.h"
+#include "kernels/simd.h"
+
+namespace yelan::kernels::YELAN_VARIANT_ISA {
+namespace {
 
 constexpr int NQ = 16 / VL;
 constexpr std::size_t kChunk = 256;
@@ -129,4 +139,9 @@ void simd_bwd(const BnShape& s, const float* x, const float* y, const float* dy,
   }
 }
 
-constexpr BnKernels simd_table(Isa isa) { return {isa, simd_stats, simd_fwd, simd_bwd}; }
+constexpr BnKernels kTable{Isa::YELAN_VARIANT_ISA, simd_stats, simd_fwd, simd_bwd};
+
+}  // namespace
+}  // namespace yelan::kernels::YELAN_VARIANT_ISA
+
+YELAN_EXPORT_KERNELS(BnKernels, bn)

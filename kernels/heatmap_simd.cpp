@@ -1,5 +1,15 @@
 // Softmax and DSNT on native vectors: each pixel's 16 lanes are 16 joint maps, so the
 // reductions over pixels are vector reductions with no shuffles.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "kernels/heatmap.h"
+#include "kernels/simd.h"
+
+namespace yelan::kernels::YELAN_VARIANT_ISA {
+namespace {
 
 constexpr int NQ = 16 / VL;
 
@@ -64,6 +74,10 @@ void simd_dsnt_bwd(int planes, int h, int w, const float* dout, float* dy) {
     }
 }
 
-constexpr HeatmapKernels simd_table(Isa isa) {
-  return {isa, simd_softmax_fwd, simd_softmax_bwd, simd_dsnt_fwd, simd_dsnt_bwd};
-}
+constexpr HeatmapKernels kTable{Isa::YELAN_VARIANT_ISA, simd_softmax_fwd, simd_softmax_bwd, simd_dsnt_fwd,
+                                simd_dsnt_bwd};
+
+}  // namespace
+}  // namespace yelan::kernels::YELAN_VARIANT_ISA
+
+YELAN_EXPORT_KERNELS(HeatmapKernels, heatmap)

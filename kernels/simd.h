@@ -1,5 +1,33 @@
-// exp, log, sigmoid and tanh on native vectors (after simd_types.inl). Accuracy, measured
-// against double precision over dense sweeps by tests/test_vmath.cpp:
+// The one vector vocabulary of every kernel variant: native-width vectors (GCC vector
+// extensions, SIMD_VL floats: 16 AVX-512, 8 AVX2, 4 NEON) and the vector math on them.
+// A family's vector code is written once over these and compiled per ISA (see variant.h);
+// -ffp-contract=fast makes `a * b + c` one FMA.
+#pragma once
+#include "kernels/variant.h"
+
+namespace yelan::kernels::YELAN_VARIANT_ISA {
+namespace {
+
+constexpr int VL = SIMD_VL;
+typedef float vf __attribute__((vector_size(SIMD_VL * 4)));
+typedef int vi __attribute__((vector_size(SIMD_VL * 4)));
+// Memory goes through under-aligned aliases: buffers need only element alignment.
+typedef float vfu __attribute__((vector_size(SIMD_VL * 4), aligned(4)));
+
+inline vf loadf(const float* p) { return *reinterpret_cast<const vfu*>(p); }
+inline void storef(float* p, vf v) { *reinterpret_cast<vfu*>(p) = v; }
+inline vf splat(float s) { return vf{} + s; }
+inline vf select(vi mask, vf a, vf b) { return (vf)((mask & (vi)a) | (~mask & (vi)b)); }
+inline vf vmax(vf a, vf b) { return select(a > b, a, b); }
+inline vf vmin(vf a, vf b) { return select(a < b, a, b); }
+inline float hsum(vf v) {
+  float s = 0;
+  for (int i = 0; i < VL; ++i) s += v[i];
+  return s;
+}
+
+// exp, log, sigmoid and tanh on native vectors. Accuracy, measured
+// against double precision over dense sweeps by tests/kernels/test_vmath.cpp:
 //   vexp  relative error <= 2.5e-7 on [-87, 88]          (degree-6 Taylor after 2^n reduction)
 //   vlog  relative error <= 2e-7 on normal positive x  (2 atanh(f/(2+f)) series to s^9)
 //   vsigmoid, vtanh absolute error <= 3e-7 everywhere   (from vexp)
@@ -69,3 +97,6 @@ inline vf vtanh(vf x) {
   const vf r = select(ax >= splat(9.f), splat(1.f), t);
   return select(x != x, x, select(x < vf{}, -r, r));
 }
+
+}  // namespace
+}  // namespace yelan::kernels::YELAN_VARIANT_ISA

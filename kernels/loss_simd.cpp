@@ -1,5 +1,15 @@
 // Loss kernels on native vectors. Partial sums stay in float vectors for 1024 elements
 // and then add up in double, so large masks do not lose the small per-pixel terms.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "kernels/loss.h"
+#include "kernels/simd.h"
+
+namespace yelan::kernels::YELAN_VARIANT_ISA {
+namespace {
 
 template <class Step>
 double chunked_sum(std::size_t n, Step&& step) {
@@ -78,4 +88,9 @@ double simd_jsd(const float* p, const float* q, std::size_t n, float eps, float*
   return sum;
 }
 
-constexpr LossKernels simd_table(Isa isa) { return {isa, simd_bce_logits, simd_jsd}; }
+constexpr LossKernels kTable{Isa::YELAN_VARIANT_ISA, simd_bce_logits, simd_jsd};
+
+}  // namespace
+}  // namespace yelan::kernels::YELAN_VARIANT_ISA
+
+YELAN_EXPORT_KERNELS(LossKernels, loss)
