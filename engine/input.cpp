@@ -6,13 +6,6 @@
 
 namespace yelan::input {
 
-void OwnedAct::resize(int n, int c, int h, int w) {
-  const layers::Act a{nullptr, n, c, h, w};
-  if (mem.size() != a.floats()) mem = layers::Floats(a.floats());
-  act = a;
-  act.data = mem.data();
-}
-
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
   const int C = a.c, H = a.h, W = a.w;
   if (vol.size() != std::size_t(C) * sensor_h * sensor_w || std::size_t(H) * d > std::size_t(sensor_h) ||

@@ -6,16 +6,9 @@
 #pragma once
 #include <vector>
 
-#include "layers/param.h"
+#include "layers/buffer.h"
 
 namespace yelan::input {
-
-// An activation that owns its memory (batches, the pipeline's frames).
-struct OwnedAct {
-  layers::Floats mem;
-  layers::Act act;
-  void resize(int n, int c, int h, int w);
-};
 
 // Mean of each d x d cell of a volume (C x H x W, channel-major, the sensor's size) into frame
 // n of a blocked activation of the model's input size.

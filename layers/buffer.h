@@ -1,5 +1,8 @@
-// Activation storage that a block keeps between its forward and backward: grows to the
-// largest shape it has held and never shrinks, so repeated passes allocate nothing.
+// The one storage for activations (block outputs kept between forward and backward, the
+// trainer's batches, the pipeline's frames); scratch inside a kernel call comes from
+// kernels::thread_scratch. A buffer grows to the largest shape it has held and never
+// shrinks, so repeated passes allocate nothing. Memory starts zeroed when it grows and is
+// otherwise reused as it is: a user that changes shapes writes every value it reads.
 #pragma once
 #include "layers/param.h"
 
@@ -7,13 +10,17 @@ namespace yelan::layers {
 
 class ActBuf {
  public:
+  Act act;  // the shape last asked for, over this buffer's memory
+
   Act get(int n, int c, int h, int w) {
-    Act a{nullptr, n, c, h, w};
+    const Act a{nullptr, n, c, h, w};
     if (mem_.size() < a.floats()) mem_ = Floats(a.floats());
-    a.data = mem_.data();
-    return a;
+    act = a;
+    act.data = mem_.data();
+    return act;
   }
   Act like(const Act& s) { return get(s.n, s.c, s.h, s.w); }
+  void resize(int n, int c, int h, int w) { get(n, c, h, w); }
 
  private:
   Floats mem_;

@@ -203,7 +203,7 @@ TEST_CASE("train: baseline inputs: unmasked TORE for masked_input false, log cou
   BatchBuilder b(nomask, 1, MaskSource::truth);
   CHECK(b.source() == MaskSource::unmasked);
   b.add(w, unused, nullptr);
-  yelan::input::OwnedAct want;
+  yelan::layers::ActBuf want;
   want.resize(nomask.window, 6, H, W);
   for (int t = 0; t < nomask.window; ++t) yelan::input::downscale_tore(w.frames[std::size_t(t)].tore, 260, 346, d, want.act, t);
   REQUIRE(b.batch().input.act.floats() == want.act.floats());
@@ -233,7 +233,7 @@ TEST_CASE("train: downscale_tore is the plain mean of each cell, bit for bit, on
     std::vector<float> vol(std::size_t(C) * sh * sw);
     for (std::size_t i = 0; i < vol.size(); ++i) vol[i] = float(std::sin(0.37 * double(i) + 1.0)) * 1.7f;
     const int H = sh / d, W = sw / d;
-    yelan::input::OwnedAct got;
+    yelan::layers::ActBuf got;
     got.resize(2, C, H, W);
     yelan::input::downscale_tore(vol, sh, sw, d, got.act, 1);
     for (int c = 0; c < C; ++c)

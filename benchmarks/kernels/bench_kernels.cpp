@@ -21,7 +21,6 @@
 #include "benchmarks/kernels/shapes.h"
 #include "benchmarks/kernels/timing.h"
 #include "benchmarks/kernels/torch_reference.h"
-#include "engine/aligned.h"
 #include "engine/cli/args.h"
 #include "engine/threads.h"
 #include "kernels/conv.h"

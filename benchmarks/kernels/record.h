@@ -3,7 +3,7 @@
 #include <random>
 #include <string>
 
-#include "engine/aligned.h"
+#include "layers/param.h"
 
 namespace yelan::bench {
 
@@ -21,10 +21,10 @@ struct Record {
 
 // 64-byte aligned floats filled with uniform noise in [-1, 1].
 struct Buffer {
-  AlignedPtr mem;
+  layers::Floats mem;
   float* p;
-  explicit Buffer(std::size_t n, unsigned seed) : mem(aligned_alloc_bytes(n * sizeof(float))) {
-    p = static_cast<float*>(mem.get());
+  explicit Buffer(std::size_t n, unsigned seed) : mem(n) {
+    p = mem.data();
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(-1.f, 1.f);
     for (std::size_t i = 0; i < n; ++i) p[i] = u(rng);

@@ -63,7 +63,7 @@ struct PosePipeline::Impl {
   RunOptions opt;
   camera::ToreVolume tore;
   std::vector<float> vol;
-  input::OwnedAct frame, unmasked, window;
+  layers::ActBuf frame, unmasked, window;
   layers::Act last_in{};
   train::Intrinsics k;
   std::int64_t dt_us, next_tick = std::numeric_limits<std::int64_t>::min();

@@ -27,8 +27,8 @@ const std::vector<float>& input_planes(const ModelConfig& cfg, const camera::sim
 
 
 struct Batch {
-  input::OwnedAct input;                    // n = windows x S frames, cfg.channels x H x W
-  input::OwnedAct labels;                   // mask stage: n x N masks (frame t + k in channel k)
+  layers::ActBuf input;                    // n = windows x S frames, cfg.channels x H x W
+  layers::ActBuf labels;                   // mask stage: n x N masks (frame t + k in channel k)
   std::vector<float> target, valid;  // pose stage: n x 13 x 3 normalised, n x 13
   std::vector<Pose13> truth_mm;      // camera frame, per frame
   std::vector<double> z_ref;         // the head's true depth per frame
@@ -57,7 +57,7 @@ class BatchBuilder {
   int windows_, used_ = 0;
   MaskSource source_;
   Batch b_;
-  input::OwnedAct one_;  // one window's unmasked input, for the frozen mask net
+  layers::ActBuf one_;  // one window's unmasked input, for the frozen mask net
   std::vector<float> planes_;  // a frame's count planes (TORE is read in place)
 };
 
