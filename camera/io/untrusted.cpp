@@ -36,6 +36,17 @@ std::tuple<dev_t, ino_t, off_t, long long> identity(const struct stat& st) {
   return {st.st_dev, st.st_ino, st.st_size, (long long)st.st_mtim.tv_sec * 1000000000LL + st.st_mtim.tv_nsec};
 }
 
+// The process's address space now, in bytes (0 if unknown). A child inherits all of it, so
+// its limit is this plus the budget: a large caller (a training) must not fail every file.
+unsigned long long address_space_bytes() {
+  const int fd = ::open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return 0;
+  char buf[64] = {};
+  const ssize_t n = ::read(fd, buf, sizeof buf - 1);
+  ::close(fd);
+  return n > 0 ? std::strtoull(buf, nullptr, 10) * static_cast<unsigned long long>(::sysconf(_SC_PAGESIZE)) : 0;
+}
+
 }  // namespace
 
 bool vetting_child() { return g_child; }
@@ -53,6 +64,7 @@ void vet_in_child(const std::string& path, const std::function<void()>& read_all
     std::lock_guard<std::mutex> lock(g_mutex);
     if (g_passed.count(identity(st))) return;
   }
+  const unsigned long long memory_limit = address_space_bytes() + limits.memory_bytes;
   const pid_t pid = ::fork();
   if (pid < 0) return;  // cannot isolate: read as before rather than refuse
   if (pid == 0) {
@@ -62,7 +74,7 @@ void vet_in_child(const std::string& path, const std::function<void()>& read_all
       if (null >= 0) ::dup2(null, 2), ::dup2(null, 1);
     }
 #ifndef YELAN_ASAN  // ASan reserves terabytes of address space; its own reports bound the damage there
-    const rlimit mem{limits.memory_bytes, limits.memory_bytes};
+    const rlimit mem{memory_limit, memory_limit};
     ::setrlimit(RLIMIT_AS, &mem);
 #endif
     const rlimit cpu{limits.seconds, limits.seconds + 1};  // SIGXCPU at the soft limit, SIGKILL a second later

@@ -14,7 +14,7 @@
 namespace yelan::camera {
 
 struct UntrustedLimits {
-  unsigned long long memory_bytes = 4ull << 30;  // the child's address space (not under ASan)
+  unsigned long long memory_bytes = 4ull << 30;  // the child's address space beyond the caller's (not under ASan)
   unsigned seconds = 120;                        // the child's CPU time
 };
 
