@@ -26,21 +26,15 @@ def main(argv=None):
     import h5py
     import numpy as np
     from weights_tools.h5weights import read_weights
-    from weights_tools.reference import MaskNet, PoseNet
+    from weights_tools.reference import load_networks
     from weights_tools.reference.config import config_from_dict
     from weights_tools.reference.losses import hpe_loss, mask_loss
 
     torch.set_num_threads(1)
     cfg_dict, groups = read_weights(a.weights)
     cfg = config_from_dict(cfg_dict, a.weights)
-    nets = {"mask": MaskNet(cfg), "pose": PoseNet(cfg)}
-    opts = {}
+    nets = load_networks(cfg, groups)
     for g, net in nets.items():
-        sd = {k: torch.from_numpy(np.asarray(v)) for k, v in groups[g].items()}
-        for k in sd:
-            if k.endswith("num_batches_tracked"):
-                sd[k] = sd[k].to(torch.int64)
-        net.load_state_dict(sd)
         net.train()
         if a.double:
             net.double()

@@ -20,15 +20,8 @@ from weights_tools.torch_or_exit import require_torch  # noqa: E402
 
 
 def load_net(stage, cfg, groups, torch):
-    import numpy as np
-    from weights_tools.reference import MaskNet, PoseNet
-    net = PoseNet(cfg) if stage == "pose" else MaskNet(cfg)
-    sd = {k: torch.from_numpy(np.array(v)) for k, v in groups[stage].items()}
-    for k in sd:
-        if k.endswith("num_batches_tracked"):
-            sd[k] = sd[k].to(torch.int64)
-    net.load_state_dict(sd)
-    return net.train()
+    from weights_tools.reference import load_networks
+    return load_networks(cfg, groups)[stage].train()
 
 
 def run(stage, cfg, groups, batches, threads, steps, warmup, torch):

@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "camera/io/aedat4.h"
-#include "camera/io/byte_source.h"
+#include "camera/io/byte_source_reader.h"
 #include "camera/io/compression.h"
 #include "camera/io/flatbuf.h"
 
@@ -32,14 +32,12 @@ int to_int(const std::string& s) {
   return ec == std::errc() && v > 0 && v <= 65536 ? v : 0;
 }
 
-class Aedat4Reader final : public EventReader {
+class Aedat4Reader final : public ByteSourceReader {
  public:
-  explicit Aedat4Reader(const std::string& path) : EventReader(path), src_(path) {
+  explicit Aedat4Reader(const std::string& path) : ByteSourceReader(path) {
     info_.format = "aedat4";
     read_header();
   }
-  std::uint64_t position() const override { return src_.offset(); }
-  std::uint64_t file_size() const override { return src_.size(); }
   bool fast_seek() const override { return data_table_ >= 0; }
 
  protected:
@@ -199,7 +197,6 @@ class Aedat4Reader final : public EventReader {
     table_ = std::move(table);
   }
 
-  ByteSource src_;
   bool table_loaded_ = false;
   std::vector<std::pair<std::uint64_t, std::int64_t>> table_;  // event packets: payload offset, last t
   Codec codec_ = Codec::none;

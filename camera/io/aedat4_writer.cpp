@@ -50,18 +50,25 @@ std::vector<unsigned char> io_header(std::int64_t data_table, const std::string&
   return b;
 }
 
-// Size-prefixed EventPacket: [size][root][EVTS][vtable 6+2][table: soffset, elements
-// offset][count][16-byte events], the event array 8-byte aligned.
-std::vector<unsigned char> event_packet(std::span<const Event> ev) {
-  std::vector<unsigned char> b(32 + 16 * ev.size(), 0);
+// The head of a size-prefixed flatbuffer whose root table holds one field, a vector at
+// byte `vector_at`: [size][root offset][4-char identifier][vtable: 6 bytes, table 8 bytes,
+// field at 4][table: soffset to the vtable, offset to the vector].
+void one_vector_table(std::vector<unsigned char>& b, const char* identifier, std::size_t vector_at) {
   put32(b, 0, static_cast<std::uint32_t>(b.size() - 4));
   put32(b, 4, 20 - 4);
-  std::memcpy(b.data() + 8, "EVTS", 4);
+  std::memcpy(b.data() + 8, identifier, 4);
   put16(b, 12, 6);
   put16(b, 14, 8);
   put16(b, 16, 4);
   put32(b, 20, 20 - 12);
-  put32(b, 24, 28 - 24);
+  put32(b, 24, static_cast<std::uint32_t>(vector_at - 24));
+}
+
+// Size-prefixed EventPacket: [size][root][EVTS][vtable 6+2][table: soffset, elements
+// offset][count][16-byte events], the event array 8-byte aligned.
+std::vector<unsigned char> event_packet(std::span<const Event> ev) {
+  std::vector<unsigned char> b(32 + 16 * ev.size(), 0);
+  one_vector_table(b, "EVTS", 28);
   put32(b, 28, static_cast<std::uint32_t>(ev.size()));
   for (std::size_t i = 0; i < ev.size(); ++i) {
     const std::size_t at = 32 + 16 * i;
@@ -87,14 +94,7 @@ std::vector<unsigned char> data_table(const std::vector<PacketEntry>& entries) {
   std::size_t first_def = defs_vt + 16;
   if (first_def % 8 != 4) first_def += 4;
   std::vector<unsigned char> b(first_def + 48 * n, 0);
-  put32(b, 0, static_cast<std::uint32_t>(b.size() - 4));
-  put32(b, 4, 20 - 4);
-  std::memcpy(b.data() + 8, "FTAB", 4);
-  put16(b, 12, 6);
-  put16(b, 14, 8);
-  put16(b, 16, 4);
-  put32(b, 20, 20 - 12);
-  put32(b, 24, static_cast<std::uint32_t>(vec_at - 24));
+  one_vector_table(b, "FTAB", vec_at);
   put32(b, vec_at, static_cast<std::uint32_t>(n));
   put16(b, defs_vt, 14);
   put16(b, defs_vt + 2, 44);

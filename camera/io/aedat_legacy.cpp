@@ -3,7 +3,7 @@
 #include <array>
 #include <cstring>
 
-#include "camera/io/byte_source.h"
+#include "camera/io/byte_source_reader.h"
 
 namespace yelan::camera {
 namespace {
@@ -22,14 +22,12 @@ void size_from_header(const std::string& header, StreamInfo& info) {
     info.width = 640, info.height = 480;
 }
 
-class AedatLegacyReader final : public EventReader {
+class AedatLegacyReader final : public ByteSourceReader {
  public:
-  AedatLegacyReader(const std::string& path, int camera) : EventReader(path), src_(path), camera_(camera) {
+  AedatLegacyReader(const std::string& path, int camera) : ByteSourceReader(path), camera_(camera) {
     read_header();
     restart();
   }
-  std::uint64_t position() const override { return src_.offset(); }
-  std::uint64_t file_size() const override { return src_.size(); }
 
  protected:
   void restart() override {
@@ -138,7 +136,6 @@ class AedatLegacyReader final : public EventReader {
     return true;
   }
 
-  ByteSource src_;
   int camera_;
   int version_ = 0;
   std::uint64_t data_offset_ = 0;

@@ -5,7 +5,7 @@
 #include <charconv>
 #include <cstring>
 
-#include "camera/io/byte_source.h"
+#include "camera/io/byte_source_reader.h"
 #include "camera/io/readers.h"
 
 namespace yelan::camera {
@@ -24,16 +24,14 @@ std::int64_t load_field(const unsigned char* rec, const Field& f) {
   return static_cast<std::int64_t>(u);
 }
 
-class NpyReader final : public EventReader {
+class NpyReader final : public ByteSourceReader {
  public:
-  explicit NpyReader(const std::string& path) : EventReader(path), src_(path) {
+  explicit NpyReader(const std::string& path) : ByteSourceReader(path) {
     info_.format = "npy";
     parse_header();
     info_.events = count_;
     restart();
   }
-  std::uint64_t position() const override { return src_.offset(); }
-  std::uint64_t file_size() const override { return src_.size(); }
 
  protected:
   void restart() override {
@@ -135,7 +133,6 @@ class NpyReader final : public EventReader {
                                      " bytes remain");
   }
 
-  ByteSource src_;
   std::array<Field, 4> fields_{};
   std::uint64_t data_offset_ = 0, count_ = 0, next_ = 0, record_ = 1;
   std::vector<unsigned char> buf_;

@@ -3,7 +3,7 @@
 #include <array>
 #include <charconv>
 
-#include "camera/io/byte_source.h"
+#include "camera/io/byte_source_reader.h"
 
 namespace yelan::camera {
 namespace {
@@ -59,19 +59,21 @@ void apply_header_line(std::string_view line, RawHeader& h, std::string& plugin)
 }
 
 // Decoders keep their state between blocks of words, so a file is read in bounded pieces.
-class RawReader : public EventReader {
+class RawReader : public ByteSourceReader {
  public:
-  RawReader(const std::string& path, const RawHeader& h, std::size_t word_bytes)
-      : EventReader(path), src_(path), header_(h), word_bytes_(word_bytes) {
+  RawReader(const std::string& path, const RawHeader& h, std::size_t word_bytes, const char* format)
+      : ByteSourceReader(path), header_(h), word_bytes_(word_bytes) {
+    info_.format = format;
     info_.width = h.width;
     info_.height = h.height;
   }
-  std::uint64_t position() const override { return src_.offset(); }
-  std::uint64_t file_size() const override { return src_.size(); }
 
  protected:
   void restart() override {
     src_.seek(header_.data_offset);
+    have_time_ = false;
+    epoch_ = last_raw_ = 0;
+    time_high_ = -1;
     reset_state();
   }
   bool decode(std::vector<Event>& out) override {
@@ -85,7 +87,7 @@ class RawReader : public EventReader {
     decode_block(block_.data(), whole, out);
     return got == block_.size();
   }
-  virtual void reset_state() = 0;
+  virtual void reset_state() = 0;  // the format's own decoder state
   virtual void decode_block(const unsigned char* p, std::size_t n, std::vector<Event>& out) = 0;
 
   // Extends a timer of `bits` bits to 64 bits: a step back of more than half the range is a
@@ -102,13 +104,13 @@ class RawReader : public EventReader {
     return last_raw_;
   }
 
-  ByteSource src_;
   RawHeader header_;
   std::size_t word_bytes_;
   std::array<unsigned char, 1 << 16> block_{};
   std::uint64_t block_offset_ = 0;
   bool have_time_ = false;
   std::int64_t epoch_ = 0, last_raw_ = 0;
+  std::int64_t time_high_ = -1;  // the unwrapped high bits of the time; -1 until a time word
 };
 
 // EVT 2.0 and 2.1 share their grammar: a 4-bit word type on top; CD words (types 0 and 1, the
@@ -119,17 +121,13 @@ template <class Format>
 class Evt2FamilyReader final : public RawReader {
  public:
   using Word = typename Format::Word;
-  explicit Evt2FamilyReader(const std::string& path, const RawHeader& h) : RawReader(path, h, sizeof(Word)) {
-    info_.format = Format::kName;
+  explicit Evt2FamilyReader(const std::string& path, const RawHeader& h)
+      : RawReader(path, h, sizeof(Word), Format::kName) {
     restart();  // not from RawReader: reset_state() is not callable there yet
   }
 
  protected:
-  void reset_state() override {
-    have_time_ = false;
-    epoch_ = last_raw_ = 0;
-    time_high_ = -1;
-  }
+  void reset_state() override {}
   void decode_block(const unsigned char* p, std::size_t n, std::vector<Event>& out) override {
     std::uint64_t no_time = 0, unknown = 0;
     for (std::size_t i = 0; i < n; i += sizeof(Word)) {
@@ -155,9 +153,6 @@ class Evt2FamilyReader final : public RawReader {
     warn_skipped(block_offset_, std::string("CD events before the first ") + Format::kTimeHigh + " (dropped)", no_time);
     warn_skipped(block_offset_, std::string("reserved ") + Format::kLabel + " word types (skipped)", unknown);
   }
-
- private:
-  std::int64_t time_high_ = -1;
 };
 
 // EVT 2.0: 32-bit words; a CD word holds 6 time bits, x and y of one pixel.
@@ -195,16 +190,12 @@ struct Evt21 {
 // events are emitted by ADDR_X (one) and VECT_12/VECT_8 (a mask from the base x).
 class Evt3Reader final : public RawReader {
  public:
-  explicit Evt3Reader(const std::string& path, const RawHeader& h) : RawReader(path, h, 2) {
-    info_.format = "evt3";
+  explicit Evt3Reader(const std::string& path, const RawHeader& h) : RawReader(path, h, 2, "evt3") {
     restart();  // not from RawReader: reset_state() is not callable there yet
   }
 
  protected:
   void reset_state() override {
-    have_time_ = false;
-    epoch_ = last_raw_ = 0;
-    time_high_ = -1;
     time_ = 0;
     y_ = base_x_ = 0;
     pol_ = 0;
@@ -271,7 +262,7 @@ class Evt3Reader final : public RawReader {
     base_x_ += width;
   }
 
-  std::int64_t time_high_ = -1, time_ = 0;
+  std::int64_t time_ = 0;
   std::uint16_t y_ = 0;
   unsigned base_x_ = 0;
   std::uint8_t pol_ = 0;

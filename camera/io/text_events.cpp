@@ -7,7 +7,7 @@
 #include <cstring>
 #include <fstream>
 
-#include "camera/io/byte_source.h"
+#include "camera/io/byte_source_reader.h"
 #include "camera/io/event_writer.h"
 #include "camera/io/readers.h"
 
@@ -73,15 +73,13 @@ bool seconds_to_us(std::string_view s, std::int64_t& us) {
   return true;
 }
 
-class TextReader final : public EventReader {
+class TextReader final : public ByteSourceReader {
  public:
-  explicit TextReader(const std::string& path) : EventReader(path), src_(path) {
+  explicit TextReader(const std::string& path) : ByteSourceReader(path) {
     info_.format = "text";
     restart();
     scan_preamble();
   }
-  std::uint64_t position() const override { return src_.offset(); }
-  std::uint64_t file_size() const override { return src_.size(); }
 
  protected:
   void restart() override {
@@ -191,7 +189,6 @@ class TextReader final : public EventReader {
     out.push_back({t, static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y), static_cast<std::uint8_t>(p == 1)});
   }
 
-  ByteSource src_;
   std::string buf_;
   std::size_t pos_ = 0;
   std::uint64_t buf_offset_ = 0, line_no_ = 0;

@@ -10,31 +10,21 @@ namespace {
 
 constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::min();
 
-void check_size(const char* who, int width, int height) {
-  if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
-    throw std::invalid_argument(std::string(who) + ": sensor size " + std::to_string(width) + "x" +
-                                std::to_string(height) + " is outside 1..65536");
-}
-
 // t - since, saturating: never overflows for kNever or far-apart stamps.
 bool within(std::int64_t t, std::int64_t since, std::int64_t window) {
   return since != kNever && t >= since && t - since <= window;
 }
 
-template <class Filter>
-std::size_t compact(Filter& f, std::vector<Event>& events) {
-  std::size_t kept = 0;
-  for (const Event& e : events)
-    if (f.accept(e)) events[kept++] = e;
-  events.resize(kept);
-  return kept;
-}
-
 }  // namespace
 
+void check_sensor_size(const char* who, int width, int height) {
+  if (width <= 0 || height <= 0 || width > 65536 || height > 65536)
+    throw std::invalid_argument(std::string(who) + ": sensor size " + std::to_string(width) + "x" +
+                                std::to_string(height) + " is outside 1..65536");
+}
+
 HotPixelFilter::HotPixelFilter(int width, int height, std::span<const std::pair<int, int>> hot_xy)
-    : width_(width), height_(height) {
-  check_size("hot pixel filter", width, height);
+    : PixelFilter("hot pixel filter", width, height) {
   hot_.assign(std::size_t(width) * height, 0);
   for (auto [x, y] : hot_xy) add(x, y);
 }
@@ -58,8 +48,6 @@ std::vector<std::pair<int, int>> HotPixelFilter::hot_pixels() const {
   return out;
 }
 
-std::size_t HotPixelFilter::apply(std::vector<Event>& events) { return compact(*this, events); }
-
 HotPixelFilter HotPixelFilter::learn(std::span<const Event> events, int width, int height,
                                      double ratio, std::size_t min_events) {
   HotPixelFilter f(width, height);
@@ -79,8 +67,7 @@ HotPixelFilter HotPixelFilter::learn(std::span<const Event> events, int width, i
 }
 
 BackgroundActivityFilter::BackgroundActivityFilter(int width, int height, std::int64_t window_us)
-    : width_(width), height_(height), window_(window_us) {
-  check_size("background activity filter", width, height);
+    : PixelFilter("background activity filter", width, height), window_(window_us) {
   if (window_us < 0) throw std::invalid_argument("background activity filter: negative window");
   last_.assign(std::size_t(width + 2) * (height + 2), kNever);
 }
@@ -91,7 +78,7 @@ void BackgroundActivityFilter::reset() {
 }
 
 bool BackgroundActivityFilter::accept(const Event& e) {
-  if (e.x >= width_ || e.y >= height_) return ++out_of_range_, false;
+  if (outside(e)) return false;
   const std::size_t stride = std::size_t(width_) + 2;
   const std::size_t centre = (std::size_t(e.y) + 1) * stride + e.x + 1;
   bool support = false;
@@ -102,11 +89,8 @@ bool BackgroundActivityFilter::accept(const Event& e) {
   return support;
 }
 
-std::size_t BackgroundActivityFilter::apply(std::vector<Event>& events) { return compact(*this, events); }
-
 RefractoryFilter::RefractoryFilter(int width, int height, std::int64_t period_us)
-    : width_(width), height_(height), period_(period_us) {
-  check_size("refractory filter", width, height);
+    : PixelFilter("refractory filter", width, height), period_(period_us) {
   if (period_us < 0) throw std::invalid_argument("refractory filter: negative period");
   last_pass_.assign(std::size_t(width) * height, kNever);
 }
@@ -117,13 +101,11 @@ void RefractoryFilter::reset() {
 }
 
 bool RefractoryFilter::accept(const Event& e) {
-  if (e.x >= width_ || e.y >= height_) return ++out_of_range_, false;
+  if (outside(e)) return false;
   std::int64_t& last = last_pass_[std::size_t(e.y) * width_ + e.x];
   if (last != kNever && e.t >= last && e.t - last < period_) return false;
   last = e.t;
   return true;
 }
-
-std::size_t RefractoryFilter::apply(std::vector<Event>& events) { return compact(*this, events); }
 
 }  // namespace yelan::camera

@@ -11,22 +11,26 @@
 namespace yelan::camera {
 namespace {
 
-// Ages are unsigned wrapped differences: a future event (t > T) or an empty slot
-// (INT64_MIN) becomes a huge age and falls outside every horizon below 2^31.
+// An event's age at t, clipped to the horizon: ages are unsigned wrapped differences, so a
+// future event (stamp > t) or an empty slot (INT64_MIN) becomes a huge age and clips like
+// any age past a horizon below 2^31. The 64-bit age is tested as two 32-bit halves:
+// baseline x86-64 (SSE2) has no 64-bit compare, and this form lets GCC vectorise there too.
+inline std::uint32_t clipped_age(std::uint64_t t, std::int64_t stamp, std::uint32_t horizon) {
+  const std::uint64_t age = t - static_cast<std::uint64_t>(stamp);
+  const std::uint32_t lo = static_cast<std::uint32_t>(age), hi = static_cast<std::uint32_t>(age >> 32);
+  return (hi == 0) & (lo < horizon) ? lo : horizon;
+}
+
 void tore_yelan_impl(const std::int64_t* stamps, std::size_t n, const ToreReadoutParams& p,
                      float* out) {
   const std::uint64_t t = static_cast<std::uint64_t>(p.t);
   const std::uint32_t horizon = static_cast<std::uint32_t>(p.horizon);
   for (std::size_t i = 0; i < n; ++i) {
-    // The 64-bit age tested as two 32-bit halves: baseline x86-64 (SSE2) has no 64-bit
-    // compare, and this form lets GCC vectorise there too.
-    const std::uint64_t age = t - static_cast<std::uint64_t>(stamps[i]);
-    const std::uint32_t lo = static_cast<std::uint32_t>(age), hi = static_cast<std::uint32_t>(age >> 32);
-    const bool live = (hi == 0) & (lo < horizon);
-    // Exact for live ages (< 2^31); dead ones are masked below.
-    const float a = static_cast<float>(static_cast<std::int32_t>(lo & 0x7fffffffu));
+    const std::uint32_t age = clipped_age(t, stamps[i], horizon);
+    // Exact: a clipped age is below 2^31.
+    const float a = static_cast<float>(static_cast<std::int32_t>(age));
     const float v = std::clamp(p.offset - p.scale * fast_ln(1.f + a), 0.f, 1.f);
-    out[i] = live ? v : 0.f;
+    out[i] = age < horizon ? v : 0.f;
   }
 }
 
@@ -35,10 +39,7 @@ void tore_baldwin_impl(const std::int64_t* stamps, std::size_t n, const ToreRead
   const std::uint64_t t = static_cast<std::uint64_t>(p.t);
   const std::uint32_t horizon = static_cast<std::uint32_t>(p.horizon);
   for (std::size_t i = 0; i < n; ++i) {
-    const std::uint64_t age = t - static_cast<std::uint64_t>(stamps[i]);
-    const std::uint32_t lo = static_cast<std::uint32_t>(age), hi = static_cast<std::uint32_t>(age >> 32);
-    const std::uint32_t clipped = (hi == 0) & (lo < horizon) ? lo : horizon;  // min(age, max_t)
-    const float a = static_cast<float>(static_cast<std::int32_t>(clipped));
+    const float a = static_cast<float>(static_cast<std::int32_t>(clipped_age(t, stamps[i], horizon)));
     out[i] = std::max(fast_ln(1.f + a) - p.offset, 0.f);
   }
 }

@@ -8,6 +8,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -577,15 +578,18 @@ struct Renderer::Impl {
     for (int tile = 0; tile < ntx * nty; ++tile)
       if (!dyn.empty_tile(tile)) touched.push_back(tile);
 
+    // Row y's columns in tile tx: none where the dynamic layer does not touch the tile.
+    auto touched_columns = [&](int y, int tx) {
+      const int x0 = tx * kTile;
+      return std::pair{x0, dyn.empty_tile((y / kTile) * ntx + tx) ? x0 : std::min(W, x0 + kTile)};
+    };
+
     // Pass 1: centre rays of every pixel in a tile the dynamic layer touches.
 #pragma omp parallel for schedule(dynamic, 4) num_threads(nt) if (nt > 1)
     for (int y = 0; y < H; ++y) {
-      const int ty = y / kTile;
       for (int tx = 0; tx < ntx; ++tx) {
-        const int tile = ty * ntx + tx;
-        if (dyn.empty_tile(tile)) continue;
-        const int xe = std::min(W, (tx + 1) * kTile);
-        for (int x = tx * kTile; x < xe; ++x) {
+        const auto [x0, xe] = touched_columns(y, tx);
+        for (int x = x0; x < xe; ++x) {
           const std::size_t i = std::size_t(y) * W + x;
           const Vec3 D = ray(x, y);
           const double DD = D.squaredNorm();
@@ -608,12 +612,9 @@ struct Renderer::Impl {
         out.depth_mm[row + x] = s_depth[row + x];
         out.mask[row + x] = s_mask[row + x];
       }
-      const int ty = y / kTile;
       for (int tx = 0; tx < ntx; ++tx) {
-        const int tile = ty * ntx + tx;
-        if (dyn.empty_tile(tile)) continue;
-        const int xe = std::min(W, (tx + 1) * kTile);
-        for (int x = tx * kTile; x < xe; ++x) {
+        const auto [x0, xe] = touched_columns(y, tx);
+        for (int x = x0; x < xe; ++x) {
           const std::size_t i = row + x;
           const int id = c_id[i];
           bool edge = false, dynamic_near = id >= S;

@@ -9,9 +9,25 @@ from .pose_net import PoseNet
 from .dsnt import dsnt, joints_from_heatmaps
 
 __all__ = ["ModelConfig", "load_config", "CONFIG_DIR", "MaskNet", "PoseNet", "dsnt",
-           "joints_from_heatmaps", "build_networks"]
+           "joints_from_heatmaps", "build_networks", "load_networks"]
 
 
 def build_networks(cfg):
     """Both networks of a config, in eval mode, with PyTorch's default initialisation."""
     return MaskNet(cfg).eval(), PoseNet(cfg).eval()
+
+
+def load_networks(cfg, groups):
+    """Both networks of a config holding the tensors of one of our weights files (the groups
+    read_weights returns), num_batches_tracked as the int64 PyTorch keeps it:
+    {"mask": MaskNet, "pose": PoseNet}, in training mode."""
+    import numpy as np
+    import torch
+    nets = {"mask": MaskNet(cfg), "pose": PoseNet(cfg)}
+    for g, net in nets.items():
+        sd = {k: torch.from_numpy(np.array(v)) for k, v in groups[g].items()}
+        for k in sd:
+            if k.endswith("num_batches_tracked"):
+                sd[k] = sd[k].to(torch.int64)
+        net.load_state_dict(sd)
+    return nets
