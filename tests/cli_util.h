@@ -1,5 +1,7 @@
 // Running the whole `yelan` command in-process, as tests of every room do.
 #pragma once
+#include <signal.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -13,17 +15,36 @@
 
 namespace yelan::test {
 
-// The real binary started as a child process (its output to /dev/null), for tests that send
-// it signals; returns the child's pid.
-inline pid_t spawn(const std::string& binary, const std::vector<std::string>& args) {
+// The real binary started as a child process (its output to /dev/null, its stderr to
+// `stderr_path` if given), for tests that send it signals; returns the child's pid.
+inline pid_t spawn(const std::string& binary, const std::vector<std::string>& args,
+                   const std::string& stderr_path = "/dev/null") {
   const pid_t child = ::fork();
   if (child != 0) return child;
   std::vector<char*> argv = {const_cast<char*>(binary.c_str())};
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
-  if (!std::freopen("/dev/null", "w", stdout) || !std::freopen("/dev/null", "w", stderr)) ::_exit(126);
+  if (!std::freopen("/dev/null", "w", stdout) || !std::freopen(stderr_path.c_str(), "w", stderr)) ::_exit(126);
   ::execv(binary.c_str(), argv.data());
   ::_exit(127);
+}
+
+// The real binary run to its end, as a shell would: its exit code, 128 + the signal that
+// killed it, or -1 when it ran longer than `seconds` (it is killed then).
+inline int run_binary(const std::string& binary, const std::vector<std::string>& args, int seconds,
+                      const std::string& stderr_path = "/dev/null") {
+  const pid_t child = spawn(binary, args, stderr_path);
+  if (child < 0) return -2;
+  int status = 0;
+  for (int waited_ms = 0; ::waitpid(child, &status, WNOHANG) != child; waited_ms += 10) {
+    if (waited_ms >= seconds * 1000) {
+      ::kill(child, SIGKILL);
+      ::waitpid(child, &status, 0);
+      return -1;
+    }
+    ::usleep(10000);
+  }
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
 }
 
 struct CliResult {

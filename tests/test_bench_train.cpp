@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "benchmarks/run/xy_chart.h"
 #include "camera/io/h5.h"
@@ -156,4 +157,17 @@ TEST_CASE("bench: chart labels of points that coincide stack instead of overlapp
   CHECK(std::abs(a - b) >= 13);
   CHECK(std::abs(b - c) >= 13);
   CHECK(std::abs(a - c) >= 13);
+}
+
+TEST_CASE("bench: charts are written through temporary files of their own, never through a planted link", "[bench]") {
+  yelan::test::CliTempDir d("xy-chart-links");
+  std::ofstream(d / "precious") << "precious";
+  for (const char* planted : {"c.svg.tmp", "c.png.tmp"})  // the names the writer used to use
+    std::filesystem::create_symlink(d / "precious", d / planted);
+  const yelan::bench::XySeries s{"a", "#2471a3", {{1, 2, "one"}, {3, 4, "two"}}};
+  const std::string png = yelan::bench::write_xy_chart(d / "c.svg", "t", "x", "y", {s});
+  CHECK(yelan::test::slurp(d / "precious") == "precious");
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "c.svg"), "</svg>"));
+  if (!png.empty()) CHECK(yelan::test::slurp(png).substr(1, 3) == "PNG");
+  for (const auto& e : std::filesystem::directory_iterator(d.p)) CHECK(e.path().string().find(".tmp-") == std::string::npos);
 }

@@ -143,12 +143,17 @@ TEST_CASE("numbers out of range are refused with exit 2 before any work, naming 
       {{"run", "--weights", M, D, "--height-mm", "1e30"}, "--height-mm"},
       {{"run", "--weights", M, D, "--depth-mm", "0"}, "--depth-mm"},
       {{"run", "--weights", M, D, "--depth-mm", "-100"}, "--depth-mm"},
+      {{"run", "--weights", M, D, "--height-mm", "-5"}, "--height-mm"},
+      {{"run", "--weights", M, D, "--height-mm", "inf"}, "--height-mm"},
+      {{"run", "--weights", M, D, "--depth-mm", "nan"}, "--depth-mm"},
+      {{"run", "--weights", M, D, "--depth-mm", "1e30"}, "--depth-mm"},
       {{"run", "--weights", M, D, "--beta", "nan"}, "--beta"},
       {{"run", "--weights", M, D, "--beta", "2"}, "--beta"},
       {{"run", "--weights", M, D, "--beta", "-1"}, "--beta"},
       {{"run", "--weights", M, D, "--rate", "inf"}, "--rate"},
       {{"eval", "--weights", M, "--sim", "test", "--seconds", "0"}, "--seconds"},
       {{"eval", "--weights", M, "--sim", "test", "--seconds", "nan"}, "--seconds"},
+      {{"eval", "--weights", M, "--sim", "test", "--seconds", "-1"}, "--seconds"},
       {{"train", "--stage", "pose", "--config", "micro", "--sim", "train", "-o", "/tmp/x", "--lr", "-1"}, "--lr"},
       {{"train", "--stage", "pose", "--config", "micro", "--sim", "train", "-o", "/tmp/x", "--lr", "abc"}, "--lr"},
       {{"train", "--stage", "pose", "--config", "micro", "--sim", "train", "-o", "/tmp/x", "--max-minutes", "0"},
@@ -267,6 +272,7 @@ TEST_CASE("messages name the file and quote attributes whole", "[cli]") {
   const Result w = cli({"run", "--weights", D, D});
   CHECK(w.code == 2);
   CHECK(has(w.err, "format is 'yelan-recording', expected 'yelan-weights'"));
+  CHECK(has(w.err, D));
   const Result f = cli({"model", "forward", "--weights", M, "--input", "nope.h5", "--output", "/tmp/never.h5"});
   CHECK(f.code == 2);
   CHECK(has(f.err, "--input nope.h5: no such file"));
@@ -337,4 +343,83 @@ TEST_CASE("the shipped models carry a checksum on their tensors", "[cli]") {
     }
     H5Fclose(f);
   }
+}
+
+TEST_CASE("event timestamps beyond +-2^60 us: info and run exit 2", "[cli]") {
+  yelan::test::CliTempDir d("big-times");
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::ofstream(d / "big.txt") << "# geometry 346x260\n-9000000000000 1 1 1\n9000000000000 2 2 0\n";  // s: +-9e18 us
+  const std::vector<std::vector<std::string>> commands = {{"info", d / "big.txt"},
+                                                          {"run", "--weights", M, d / "big.txt", "--out", d / "o.csv"}};
+  for (const auto& argv : commands) {
+    const Result r = cli(argv);
+    INFO(argv[0] << ": " << r.err);
+    CHECK(r.code == 2);
+    CHECK(has(r.err, d / "big.txt"));
+    CHECK(has(r.err, "is outside +-2^60 us"));
+  }
+}
+
+#include "weights_tools/weights_file.h"
+
+TEST_CASE("weights whose tensors do not fit their config: exit 2 naming the file and the tensor", "[cli]") {
+  yelan::test::CliTempDir d("misfit");
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
+  yelan::weights::Weights w = yelan::weights::load_weights(M);
+  std::string key;
+  for (auto& [name, t] : w.groups.at("pose"))
+    if (t.shape.size() > 1) {  // flattened: the same values in a shape the network does not have
+      key = name;
+      t.shape = {yelan::weights::element_count(t.shape)};
+      break;
+    }
+  REQUIRE_FALSE(key.empty());
+  yelan::weights::save_weights(d / "misfit.h5", w);
+  const Result r = cli({"run", "--weights", d / "misfit.h5", D, "--out", d / "o.csv"});
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(has(r.err, d / "misfit.h5" + ": /pose does not fit"));
+  CHECK(has(r.err, "mis-shaped: " + key + " is ["));
+  CHECK_FALSE(std::filesystem::exists(d / "o.csv"));
+}
+
+TEST_CASE("a byte flipped inside a tensor's data: its checksum catches it, exit 2 naming the tensor", "[cli]") {
+  yelan::test::CliTempDir d("flipped");
+  const std::string M = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
+  std::filesystem::copy_file(M, d / "flipped.h5");
+  std::string tensor;
+  haddr_t at = HADDR_UNDEF;
+  {
+    const yelan::weights::WeightsReader r(M);
+    for (const auto& t : r.tensors("pose"))
+      if (yelan::weights::element_count(t.shape) >= 64) {
+        tensor = t.name;
+        break;
+      }
+    REQUIRE_FALSE(tensor.empty());
+    const hid_t f = H5Fopen(M.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    REQUIRE(f >= 0);
+    const hid_t ds = H5Dopen2(f, ("/pose/" + tensor).c_str(), H5P_DEFAULT);
+    REQUIRE(ds >= 0);
+    at = H5Dget_offset(ds);  // contiguous storage: the data's first byte in the file
+    H5Dclose(ds);
+    H5Fclose(f);
+  }
+  REQUIRE(at != HADDR_UNDEF);
+  {
+    std::fstream f(d / "flipped.h5", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekg(std::streamoff(at + 4 * 17 + 1));  // a byte inside the 18th value
+    const char c = char(f.get());
+    f.seekp(std::streamoff(at + 4 * 17 + 1));
+    f.put(char(c ^ 0x10));
+    REQUIRE(f.good());
+  }
+  const Result r = cli({"run", "--weights", d / "flipped.h5", D, "--out", d / "o.csv"});
+  INFO(r.err);
+  CHECK(r.code == 2);
+  CHECK(has(r.err, d / "flipped.h5"));
+  CHECK(has(r.err, "tensor /pose/" + tensor + ": checksum mismatch"));
+  CHECK_FALSE(std::filesystem::exists(d / "o.csv"));
 }

@@ -180,6 +180,19 @@ TEST_CASE("run: --viz OUT.mp4 encodes the frames into a video with ffmpeg, and i
   CHECK_FALSE(std::filesystem::exists(d / "f.mp4"));
   CHECK_FALSE(std::filesystem::exists(d / "f.mp4.part.mp4"));
   CHECK(std::filesystem::exists(d / "q.csv"));
+  // An ffmpeg that writes its output: into a temporary file of ours, never through a link
+  // planted where the old fixed name "OUT.part.mp4" was (ffmpeg -y follows links).
+  std::ofstream(d / "bin/ffmpeg") << "#!/bin/sh\nfor a; do last=$a; done\nprintf 'fake mp4' > \"${last#file:}\"\n";
+  std::ofstream(d / "precious") << "precious";
+  std::filesystem::create_symlink(d / "precious", d / "s.mp4.part.mp4");
+  ::setenv("PATH", (d / "bin" + ":" + path).c_str(), 1);
+  const auto s = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "s.mp4", "--out", d / "s.csv"});
+  ::setenv("PATH", path.c_str(), 1);
+  INFO(s.err);
+  CHECK(s.code == 0);
+  CHECK(slurp(d / "s.mp4") == "fake mp4");
+  CHECK(slurp(d / "precious") == "precious");
+  for (const auto& e : std::filesystem::directory_iterator(d.p)) CHECK(e.path().string().find(".tmp-") == std::string::npos);
   // A folder: PNGs, plus run.mp4 beside them when ffmpeg is there; the summary names both.
   const auto g = run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--viz", d / "pics/"});
   REQUIRE(g.code == 0);

@@ -146,6 +146,21 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   CHECK(yelan::test::run_cli({"train", "--config", "micro"}).code == 2);
 }
 
+TEST_CASE("train: --steps fewer than --epoch-steps still validates at the end and writes best.h5", "[train][cli]") {
+  // Issue 17 row 14: the run ended before its first epoch, so it reported "best validation 1e+30"
+  // (the initial value) and wrote no best.h5.
+  yelan::test::CliTempDir d("train-short");
+  const auto r = yelan::test::run_cli({"train", "--stage", "pose", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                       "--steps", "2", "--epoch-steps", "100", "--val-windows", "1", "--batch", "1",
+                                       "--threads", "1", "-o", d / "run"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(std::filesystem::exists(d / "run/best.h5"));
+  CHECK(yelan::test::contains(r.out, "best validation"));
+  CHECK_FALSE(yelan::test::contains(r.out + r.err, "1e+30"));
+  CHECK_FALSE(yelan::test::contains(r.out + r.err, "1e30"));
+}
+
 TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bit-exactly, and eval --data scores them", "[train][cli]") {
   yelan::test::CliTempDir d("train-data");
   std::filesystem::create_directories(d / "rec");

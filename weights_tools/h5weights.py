@@ -9,6 +9,8 @@ import os
 import h5py
 import numpy as np
 
+from .atomic import atomic_path
+
 FORMAT = "yelan-weights"
 VERSION = 1
 GROUPS = ("mask", "pose")
@@ -82,10 +84,24 @@ def _untimed_group(parent, name):
     return h5py.Group(h5py.h5g.create(parent.id, name.encode(), gcpl=gcpl))
 
 
+CHECKSUM_ATTR = "fnv1a64"
+# The C++ writer's constants (weights_tools/weights_file.cpp). Its offset basis is one digit
+# short of FNV's published 14695981039346656037; kept, so every file written so far verifies.
+_FNV_OFFSET, _FNV_PRIME, _MASK64 = 1469598103934665603, 1099511628211, (1 << 64) - 1
+
+
+def tensor_checksum(arr):
+    """FNV-1a's loop (64-bit) over a tensor's float32 bytes, little-endian as stored: the
+    attribute `fnv1a64` the C++ writer puts on every dataset and its loader verifies."""
+    h = _FNV_OFFSET
+    for b in np.ascontiguousarray(arr, dtype="<f4").tobytes():
+        h = ((h ^ b) * _FNV_PRIME) & _MASK64
+    return h
+
+
 def write_weights(path, config_json, groups):
     """groups: {group: {key: float32 ndarray}}. Written to a temp file, then renamed."""
-    tmp = f"{path}.tmp-{os.getpid()}"
-    try:
+    with atomic_path(path) as tmp:
         with h5py.File(tmp, "w", track_order=False) as f:
             f.attrs["format"] = FORMAT
             f.attrs["version"] = np.int64(VERSION)
@@ -94,12 +110,8 @@ def write_weights(path, config_json, groups):
                 grp = _untimed_group(f, g)
                 for key in sorted(groups.get(g, {})):
                     arr = np.asarray(groups[g][key], dtype=np.float32, order="C")  # keeps 0-d as 0-d
-                    grp.create_dataset(key, data=arr, track_times=False)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+                    ds = grp.create_dataset(key, data=arr, track_times=False)
+                    ds.attrs.create(CHECKSUM_ATTR, np.uint64(tensor_checksum(arr)), dtype="<u8")
 
 
 def read_weights(path):

@@ -63,13 +63,9 @@ def main(argv=None):
         return 2
     obj = sds[a.group] if a.group else {"format": COMBINED_FORMAT, "version": 1,
                                         "config": cfg_json, **sds}
-    tmp = f"{a.output}.tmp-{os.getpid()}"
-    try:
+    from weights_tools.atomic import atomic_path
+    with atomic_path(a.output) as tmp:
         torch.save(obj, tmp)
-        os.replace(tmp, a.output)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
     print(f"wrote {a.output}")
     return 0
 

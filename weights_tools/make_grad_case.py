@@ -11,6 +11,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from weights_tools.atomic import atomic_path  # noqa: E402
 from weights_tools.torch_or_exit import require_torch  # noqa: E402
 
 
@@ -54,8 +55,7 @@ def main(argv=None):
     lp, stages = hpe_loss(heatmaps, target.to(dt), valid.to(dt))
     lp.backward()
 
-    tmp = f"{a.output}.tmp-{os.getpid()}"
-    try:
+    with atomic_path(a.output) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = "yelan-grad-case"
             f.attrs["loss_mask"] = float(lm)
@@ -72,10 +72,6 @@ def main(argv=None):
                     gg.create_dataset(k, data=prm.grad.numpy().astype(np.float32 if not a.double else np.float64), track_times=False)
                 for k, buf in net.named_buffers():
                     ga.create_dataset(k, data=buf.numpy().astype(np.float32), track_times=False)
-        os.replace(tmp, a.output)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
     print(f"wrote {a.output}: loss_mask {float(lm):.6g}, loss_pose {float(lp):.6g}")
     return 0
 

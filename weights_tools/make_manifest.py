@@ -7,6 +7,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from weights_tools.atomic import write_text_atomically  # noqa: E402
 from weights_tools.torch_or_exit import require_torch  # noqa: E402
 
 
@@ -57,10 +58,7 @@ def main(argv=None):
                 print(f"{out}: out of date")
                 stale += 1
             continue
-        tmp = f"{out}.tmp-{os.getpid()}"
-        with open(tmp, "w") as f:
-            f.write(text)
-        os.replace(tmp, out)
+        write_text_atomically(out, text)
         print(f"wrote {out}")
     return 1 if stale else 0
 

@@ -11,6 +11,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from weights_tools.atomic import atomic_path  # noqa: E402
 from weights_tools.torch_or_exit import require_torch  # noqa: E402
 
 
@@ -105,8 +106,7 @@ def main(argv=None):
     write_weights(weights, cfg.to_json(), {
         g: {k: to_float32(k, v, "parity") for k, v in n.state_dict().items()}
         for g, n in (("mask", mask_net), ("pose", pose_net))})
-    tmp = f"{a.output}.tmp-{os.getpid()}"
-    try:
+    with atomic_path(a.output) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = "yelan-parity-case"
             f.attrs["version"] = np.int64(1)
@@ -117,10 +117,6 @@ def main(argv=None):
             f.create_dataset("input", data=x.numpy(), track_times=False)
             for name, t in out.items():
                 f.create_dataset(name, data=t.numpy().astype(np.float32), track_times=False)
-        os.replace(tmp, a.output)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
     print(f"wrote {a.output} and {weights}")
     return 0
 

@@ -10,6 +10,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from weights_tools.atomic import atomic_path  # noqa: E402
 from weights_tools.torch_or_exit import require_torch  # noqa: E402
 
 
@@ -42,8 +43,7 @@ def main(argv=None):
     gen = torch.Generator().manual_seed(a.seed)
     S, J = cfg.window, cfg.joints
     losses = {"mask": [], "pose": []}
-    tmp = f"{a.output}.tmp-{os.getpid()}"
-    try:
+    with atomic_path(a.output) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = "yelan-train-case"
             for i in range(a.steps):
@@ -69,10 +69,6 @@ def main(argv=None):
                 losses["pose"].append(float(lp))
             for k, v in losses.items():
                 f.create_dataset("loss_" + k, data=np.array(v, dtype=np.float64), track_times=False)
-        os.replace(tmp, a.output)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
     print(f"wrote {a.output}: {a.steps} steps, loss_mask {losses['mask'][0]:.6g} -> {losses['mask'][-1]:.6g}, "
           f"loss_pose {losses['pose'][0]:.6g} -> {losses['pose'][-1]:.6g}")
     return 0

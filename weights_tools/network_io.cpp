@@ -10,9 +10,9 @@ bool ends_with(const std::string& s, const std::string& tail) {
 }
 }  // namespace
 
-void load_group(const Weights& w, const std::string& group, layers::ParamList& params) {
+void load_group(const Weights& w, const std::string& group, layers::ParamList& params, const std::string& source) {
   auto g = w.groups.find(group);
-  if (g == w.groups.end()) throw WeightsError("weights: no group /" + group);
+  if (g == w.groups.end()) throw WeightsError(source + ": no group /" + group);
   std::vector<std::string> missing, shape, extra;
   std::set<std::string> ours;
   for (auto& p : params) {
@@ -27,7 +27,7 @@ void load_group(const Weights& w, const std::string& group, layers::ParamList& p
   for (auto& [k, t] : g->second)
     if (!ours.count(k)) extra.push_back(k);
   if (!missing.empty() || !shape.empty() || !extra.empty()) {
-    std::string msg = "weights: /" + group + " does not fit the network built from its config";
+    std::string msg = source + ": /" + group + " does not fit the network built from its config";
     auto list = [&](const char* what, const std::vector<std::string>& v) {
       for (std::size_t i = 0; i < v.size() && i < 20; ++i) msg += std::string("\n  ") + what + v[i];
       if (v.size() > 20) msg += "\n  ... and " + std::to_string(v.size() - 20) + " more " + what;
@@ -91,8 +91,8 @@ LoadedNetworks::LoadedNetworks(const Weights& w, const std::string& path)
     : cfg(parse_model_config(w.config_json, path + ": attribute config")), mask(cfg), pose(cfg) {
   mask.params(mp);
   pose.params(pp);
-  load_group(w, "mask", mp);
-  load_group(w, "pose", pp);
+  load_group(w, "mask", mp, path);
+  load_group(w, "pose", pp, path);
   mask.weights_changed();
   pose.weights_changed();
   mask.set_training(false);

@@ -4,10 +4,12 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "benchmarks/bench_util.h"
+#include "camera/io/temp_file.h"
 
 
 #ifndef YELAN_SOURCE_DIR
@@ -52,15 +54,16 @@ TorchTimes torch_conv_times(const std::vector<ConvCase>& cases, const std::vecto
         << ".fwd\", \"" << kind << ".bwd_data\", \"" << kind << ".bwd_weights\"]}";
   }
   req << "]}";
-  const std::string tmp = "/tmp/yelan-torch-req-" + std::to_string(::getpid()) + ".json";
-  std::ofstream(tmp) << req.str();
+  // The request in a file of ours, created exclusively under a random name (a fixed name in
+  // /tmp could be a planted link), removed when `request` goes.
+  const camera::TempFile request((std::filesystem::temp_directory_path() / "yelan-torch-request.json").string());
+  std::ofstream(request.path()) << req.str();
   Program py({"/usr/bin/python3", script});
-  py.stdin_path = tmp;
+  py.stdin_path = request.path();
   py.capture_stdout = true;
   py.show_stderr = true;
   const ProgramResult res = run_program(py);
   const std::string text = res.ok() ? res.out : std::string();
-  std::remove(tmp.c_str());
   if (text.empty()) {
     *why = "the PyTorch script failed: /usr/bin/python3 " + script + ": " + (res.ok() ? "no output" : res.why());
     return out;

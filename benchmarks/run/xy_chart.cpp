@@ -5,10 +5,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 
+#include "camera/io/temp_file.h"
 #include "engine/subprocess.h"
 
 namespace yelan::bench {
@@ -104,24 +104,16 @@ std::string write_xy_chart(const std::string& svg_path, const std::string& title
       << W - R - 180 << "\" y=\"" << T + 16 + 18 * i << "\">" << esc(s.name) << "</text>\n";
   }
   o << "</svg>\n";
-  const std::string tmp = svg_path + ".tmp";
-  {
-    std::ofstream f(tmp);
-    f << o.str();
-    if (!f) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::filesystem::rename(tmp, svg_path);
+  camera::write_file_atomically(svg_path, o.str());
   if (svg_path.size() < 4 || svg_path.substr(svg_path.size() - 4) != ".svg") return "";
   const std::string png = svg_path.substr(0, svg_path.size() - 4) + ".png";
-  // The PNG is a convenience for READMEs; the SVG is the result.
+  // The PNG is a convenience for READMEs; the SVG is the result. rsvg-convert overwrites a
+  // temporary file of ours (created exclusively), removed unless it succeeds.
+  camera::TempFile tmp(png);
   // Absolute paths: one starting with '-' would read as an option.
-  const std::string abs_svg = std::filesystem::absolute(svg_path).string(), abs_png = std::filesystem::absolute(png + ".tmp").string();
-  if (!run_program(Program({"rsvg-convert", "-o", abs_png, abs_svg})).ok()) {
-    std::error_code ec;
-    std::filesystem::remove(png + ".tmp", ec);
-    return "";
-  }
-  std::filesystem::rename(png + ".tmp", png);
+  const std::string abs_svg = std::filesystem::absolute(svg_path).string(), abs_png = std::filesystem::absolute(tmp.path()).string();
+  if (!run_program(Program({"rsvg-convert", "-o", abs_png, abs_svg})).ok()) return "";
+  tmp.commit();
   return png;
 }
 

@@ -12,6 +12,10 @@ import math
 import os
 import shutil
 import subprocess
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+from weights_tools.atomic import atomic_path, write_text_atomically  # noqa: E402  (standard library only)
 
 COLOURS = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b"]
 
@@ -105,13 +109,15 @@ def main():
         body.append(f'<line x1="{x}" x2="{x + 24}" y1="{y - 4}" y2="{y - 4}" stroke="{c}" stroke-width="3"/>')
         body.append(f'<text x="{x + 30}" y="{y}" font-size="12">{r["name"]} ({r["meta"]["config"]})</text>')
     body.append("</svg>")
-    with open(a.out + ".tmp", "w") as f:
-        f.write("\n".join(body) + "\n")
-    os.replace(a.out + ".tmp", a.out)
+    write_text_atomically(a.out, "\n".join(body) + "\n")
     if shutil.which("rsvg-convert") and a.out.endswith(".svg"):
-        subprocess.run(["rsvg-convert", "-o", a.out[:-4] + ".png", os.path.abspath(a.out)], check=False)
+        try:  # the PNG is a convenience; the SVG is the result
+            with atomic_path(a.out[:-4] + ".png") as tmp:
+                subprocess.run(["rsvg-convert", "-o", os.path.abspath(tmp), os.path.abspath(a.out)], check=True)
+        except subprocess.CalledProcessError:
+            pass
     if a.csv:
-        with open(a.csv, "w", newline="") as f:
+        with atomic_path(a.csv) as tmp, open(tmp, "w", newline="") as f:
             w = csv.writer(f)
             w.writerow(["run", "config", "step", "frames", "cpu_h", "val_mpjpe_mm"])
             for r in runs:

@@ -18,6 +18,8 @@ import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, ROOT)
+from weights_tools.atomic import atomic_path, write_text_atomically  # noqa: E402  (standard library only)
 
 
 def load_json(path):
@@ -151,14 +153,10 @@ def frontier_svg(rows, path):
         o.append(f'<circle cx="{W - R - 170}" cy="{T + 12 + 18 * i}" r="5" fill="{colour}"/>'
                  f'<text x="{W - R - 160}" y="{T + 16 + 18 * i}">{label}</text>')
     o.append("</svg>\n")
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(o))
-    os.replace(tmp, path)
+    write_text_atomically(path, "\n".join(o))
     if shutil.which("rsvg-convert"):
-        png = path[:-4] + ".png"
-        subprocess.run(["rsvg-convert", "-o", png + ".tmp", path], check=True)
-        os.replace(png + ".tmp", png)
+        with atomic_path(path[:-4] + ".png") as tmp:
+            subprocess.run(["rsvg-convert", "-o", os.path.abspath(tmp), os.path.abspath(path)], check=True)
     return True
 
 
@@ -170,10 +168,9 @@ def main():
     spec = load_json(os.path.join(HERE, "methods.json"))
     cmp_rows, size_rows = collect(a.results, spec, "comparison"), collect(a.results, spec, "sizes")
     text = "### Comparison (a)-(f)\n\n" + table(cmp_rows) + "\n### Model sizes\n\n" + table(size_rows, sizes=True)
-    with open(os.path.join(a.results, "table.md"), "w") as f:
-        f.write(text)
-    with open(os.path.join(a.results, "summary.json"), "w") as f:
-        json.dump({"comparison": cmp_rows, "sizes": size_rows}, f, indent=1)
+    write_text_atomically(os.path.join(a.results, "table.md"), text)
+    write_text_atomically(os.path.join(a.results, "summary.json"),
+                          json.dumps({"comparison": cmp_rows, "sizes": size_rows}, indent=1))
     print(text)
     scored = [r for r in size_rows if r["mpjpe_mm"] is not None]
     if scored:

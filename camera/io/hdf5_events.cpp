@@ -67,7 +67,7 @@ class Hdf5Reader final : public EventReader {
         ++bad;
         continue;
       }
-      out.push_back({cols_[0][i] + t_offset_, static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y),
+      out.push_back({offset_time(cols_[0][i], next_ + i), static_cast<std::uint16_t>(x), static_cast<std::uint16_t>(y),
                      static_cast<std::uint8_t>(cols_[3][i] > 0)});
     }
     warn_skipped(0, "rows from " + std::to_string(next_) + " hold coordinates outside 0..65535 (dropped)", bad);
@@ -77,8 +77,11 @@ class Hdf5Reader final : public EventReader {
 
   bool seek_index(std::int64_t t) override {
     if (!ms_to_idx_.valid()) return false;
-    const std::int64_t k = t < ms_origin_ ? 0 : (t - ms_origin_) / 1000;
-    if (k >= static_cast<std::int64_t>(ms_len_)) {
+    // t - ms_origin_ past INT64_MAX (an origin near INT64_MIN in a hostile file) lies past the end.
+    std::int64_t since = 0;
+    const bool past_end = t >= ms_origin_ && __builtin_sub_overflow(t, ms_origin_, &since);
+    const std::int64_t k = t < ms_origin_ ? 0 : since / 1000;
+    if (past_end || k >= static_cast<std::int64_t>(ms_len_)) {
       next_ = rows_;
       return true;
     }
@@ -139,8 +142,18 @@ class Hdf5Reader final : public EventReader {
       h5::check_stored_chunks(column_ds(0), 0, 1, size_, kMaxChunkBytes);
       std::int64_t t0 = 0;
       h5::read_rows(column_ds(0), H5T_NATIVE_INT64, 0, 1, &t0, matrix_.valid() ? 0 : -1);
-      info_.t_first = t0 + t_offset_;
+      info_.t_first = offset_time(t0, 0);
     }
+  }
+
+  // A row's time plus t_offset (DSEC), checked: the sum of two values near INT64_MAX would
+  // wrap (undefined behaviour) before the base class could refuse the timestamp.
+  std::int64_t offset_time(std::int64_t t, hsize_t row) const {
+    std::int64_t sum = 0;
+    if (__builtin_add_overflow(t, t_offset_, &sum))
+      throw FormatError(path_, position(), "row " + std::to_string(row) + ": t " + std::to_string(t) + " + t_offset " +
+                                               std::to_string(t_offset_) + " overflows 64 bits");
+    return sum;
   }
 
   void check_chunks(hid_t ds, const std::string& name) {

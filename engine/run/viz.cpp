@@ -4,8 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 
+#include "camera/io/temp_file.h"
 #include "camera/repr/preview_png.h"
 #include "camera/sim/preview.h"
 #include "engine/subprocess.h"
@@ -136,7 +138,15 @@ void RunViz::finish() {
   const bool video = !video_.empty();
   if (written_ == 0 || (!video && !have_ffmpeg())) return;
   const std::string out = video ? video_ : (std::filesystem::path(dir_) / "run.mp4").string();
-  const std::string part = out + ".part.mp4";
+  // ffmpeg overwrites (-y) a temporary file that is ours, created exclusively under a random
+  // name (a link planted at a predictable name would be followed); "-f mp4" names the muxer.
+  std::unique_ptr<camera::TempFile> part;
+  try {
+    part = std::make_unique<camera::TempFile>(out);
+  } catch (const std::runtime_error& e) {
+    problem_ = e.what();
+    return;
+  }
   char rate[32];
   std::snprintf(rate, sizeof rate, "%.3f", fps_);
   // ffmpeg reads the input as a frame-number pattern (a literal '%' in the folder is "%%"),
@@ -146,20 +156,20 @@ void RunViz::finish() {
   pattern += "/pose_%06d.png";
   Program ffmpeg({"ffmpeg", "-loglevel", "error", "-nostdin", "-y", "-framerate", rate, "-f", "image2", "-i",
                   "file:" + pattern, "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-f", "mp4",
-                  "file:" + part});
+                  "file:" + part->path()});
   ffmpeg.show_stderr = true;  // its own reason, when it fails
-  std::error_code ec;
   if (const ProgramResult r = run_program(ffmpeg); !r.ok()) {
-    std::filesystem::remove(part, ec);
     problem_ = "ffmpeg could not make " + out + " (" + r.why() + ")";
-    return;
+    return;  // the temporary file goes with `part`
   }
-  std::filesystem::rename(part, out, ec);
-  if (ec) {
-    problem_ = "cannot move " + part + " to " + out + ": " + ec.message();
+  try {
+    part->commit();
+  } catch (const std::runtime_error& e) {
+    problem_ = e.what();
     return;
   }
   encoded_ = true;
+  std::error_code ec;
   if (video) std::filesystem::remove_all(dir_, ec);
 }
 

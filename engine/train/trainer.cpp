@@ -259,10 +259,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   pose.init(spec.seed * 2 + 2);
   if (!spec.init_weights.empty()) {
     const weights::Weights w = weights::load_weights(spec.init_weights);
-    weights::load_group(w, "mask", mp);
-    weights::load_group(w, "pose", pp);
+    weights::load_group(w, "mask", mp, spec.init_weights);
+    weights::load_group(w, "pose", pp, spec.init_weights);
   }
-  if (pose_stage && !spec.mask_weights.empty()) weights::load_group(weights::load_weights(spec.mask_weights), "mask", mp);
+  if (pose_stage && !spec.mask_weights.empty()) weights::load_group(weights::load_weights(spec.mask_weights), "mask", mp, spec.mask_weights);
   mask.weights_changed();
   pose.weights_changed();
 
@@ -275,7 +275,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     // A checkpoint holds the trained group (older ones both).
     for (const auto& [g, params] : {std::pair<const char*, layers::ParamList*>{"mask", &mp}, {"pose", &pp}}) {
       const auto it = w.groups.find(g);
-      if (it != w.groups.end() && !it->second.empty()) weights::load_group(w, g, *params);
+      if (it != w.groups.end() && !it->second.empty()) weights::load_group(w, g, *params, ckpt);
     }
     mask.weights_changed();
     pose.weights_changed();

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "camera/io/event_reader.h"
+#include "camera/io/h5.h"
 
 namespace yelan::test {
 
@@ -53,6 +54,16 @@ inline std::vector<camera::Event> read_all(camera::EventReader& r, std::size_t b
 inline std::vector<camera::Event> read_all(const std::string& path) {
   auto r = camera::open_event_file(path);
   return read_all(*r);
+}
+
+// A 1-D HDF5 dataset holding `v` (file layouts of other tools, built with the C API).
+template <typename T>
+void h5_dataset_1d(hid_t loc, const char* name, hid_t file_type, hid_t mem_type, const std::vector<T>& v) {
+  namespace h5 = camera::h5;
+  hsize_t n[1] = {v.size()};
+  h5::H5Id space = h5::check(H5Screate_simple(1, n, nullptr), "space");
+  h5::H5Id ds = h5::check(H5Dcreate2(loc, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
+  h5::check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), name);
 }
 
 // Little-endian word writers for RAW payloads.

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cstring>
+#include <limits>
 
 #include "camera/io/event_writer.h"
 #include "io_test_util.h"
@@ -285,10 +286,91 @@ TEST_CASE("fuzz finding: a .npy dtype field without its closing parenthesis", "[
 }
 
 TEST_CASE("timestamps whose differences could overflow are refused, in every reader", "[io][bad]") {
+  namespace h5 = yelan::camera::h5;
   ScratchDir dir("bigt");
-  const std::string path = dir.file("big.txt");
-  write_text(path, "-9000000000000 1 1 1\n9000000000000 2 2 0\n");  // seconds: +-9e18 us
-  CHECK_THROWS_WITH(read_all(path), Catch::Contains("is outside +-2^60 us"));
-  write_text(path, "1 1 1 1\n2 2 2 0\n");
-  CHECK(read_all(path).size() == 2);
+  const auto refused = [](const std::string& path) {
+    INFO(path);
+    CHECK_THROWS_WITH(read_all(path), Catch::StartsWith(path + ": offset ") && Catch::Contains("is outside +-2^60 us"));
+  };
+  constexpr std::int64_t kBig = 9'000'000'000'000'000'000LL;  // +-9e18 us: their difference overflows int64
+  const std::string text = dir.file("big.txt");
+  write_text(text, "-9000000000000 1 1 1\n9000000000000 2 2 0\n");  // seconds
+  refused(text);
+  write_text(text, "1 1 1 1\n2 2 2 0\n");
+  CHECK(read_all(text).size() == 2);
+  // .npy: a structured array of t, x, y, p.
+  std::string dict = "{'descr': [('t', '<i8'), ('x', '<u2'), ('y', '<u2'), ('p', '|u1')], 'fortran_order': False, 'shape': (2,), }";
+  while ((10 + dict.size() + 1) % 64) dict += ' ';
+  dict += '\n';
+  std::vector<unsigned char> npy = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0};
+  put_le<std::uint16_t>(npy, static_cast<std::uint16_t>(dict.size()));
+  npy.insert(npy.end(), dict.begin(), dict.end());
+  for (const std::int64_t t : {-kBig, kBig}) {
+    put_le<std::int64_t>(npy, t);
+    put_le<std::uint16_t>(npy, 1), put_le<std::uint16_t>(npy, 1), npy.push_back(1);
+  }
+  write_bytes(dir.file("big.npy"), npy);
+  refused(dir.file("big.npy"));
+  // Ours, as another tool would write it (our writer refuses such a span itself).
+  {
+    h5::H5Id f = h5::create_file(dir.file("big.yelan.h5"));
+    h5::write_attr_string(f.get(), "format", "yelan-recording");
+    h5::H5Id g = h5::create_group(f.get(), "events");
+    h5_dataset_1d<std::int64_t>(g.get(), "t", H5T_STD_I64LE, H5T_NATIVE_INT64, {-kBig, kBig});
+    h5_dataset_1d<std::uint16_t>(g.get(), "x", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2});
+    h5_dataset_1d<std::uint16_t>(g.get(), "y", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2});
+    h5_dataset_1d<std::uint8_t>(g.get(), "p", H5T_STD_U8LE, H5T_NATIVE_UINT8, {1, 0});
+  }
+  refused(dir.file("big.yelan.h5"));
+  // v2e: one N x 4 dataset.
+  {
+    h5::H5Id f = h5::create_file(dir.file("big-v2e.h5"));
+    const std::vector<std::int64_t> rows = {-kBig, 1, 1, 1, kBig, 2, 2, 0};
+    hsize_t dims[2] = {2, 4};
+    h5::H5Id space = h5::check(H5Screate_simple(2, dims, nullptr), "space");
+    h5::H5Id ds = h5::check(H5Dcreate2(f.get(), "events", H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                                       H5P_DEFAULT), "events");
+    h5::check(H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows.data()), "events");
+  }
+  refused(dir.file("big-v2e.h5"));
+  // AEDAT 4.0: int64 timestamps in its event packets.
+  {
+    auto w = yelan::camera::open_event_writer(dir.file("big.aedat4"), {"", 8, 8, {}, {}});
+    const std::vector<Event> ev = {{-kBig, 1, 1, 1}, {kBig, 2, 2, 0}};
+    w->write(ev);
+    w->close();
+  }
+  refused(dir.file("big.aedat4"));
+  // AEDAT 3.1: a packet's overflow counter of 2^30 puts its events at 2^61 us.
+  auto a3 = raw_header("#!AER-DAT3.1\r\n#Format: RAW\r\n#Source 1: DAVIS346\r\n#!END-HEADER\r\n");
+  put_le<std::int16_t>(a3, 1), put_le<std::int16_t>(a3, 1);  // polarity packet, source 1
+  for (const std::int32_t v : {8, 4, 1 << 30, 1, 1, 1}) put_le<std::int32_t>(a3, v);  // size, ts offset, overflow, counts
+  put_le<std::uint32_t>(a3, (7u << 17) | (8u << 2) | (1u << 1) | 1u);                   // x 7, y 8, ON, valid
+  put_le<std::int32_t>(a3, 5);
+  write_bytes(dir.file("big.aedat"), a3);
+  refused(dir.file("big.aedat"));
+  // Prophesee RAW (EVT 2/2.1/3) cannot carry them: a timer wrapping past 2^50 us is refused first.
+}
+
+TEST_CASE("DSEC HDF5: t_offset near INT64_MAX plus a row's t overflows, refused naming the file", "[io][h5][dsec][bad]") {
+  namespace h5 = yelan::camera::h5;
+  ScratchDir dir("dsec-overflow");
+  const std::string path = dir.file("events.h5");
+  {
+    h5::H5Id f = h5::create_file(path);
+    h5::H5Id g = h5::create_group(f.get(), "events");
+    h5_dataset_1d<std::uint16_t>(g.get(), "x", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2});
+    h5_dataset_1d<std::uint16_t>(g.get(), "y", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2});
+    h5_dataset_1d<std::uint8_t>(g.get(), "p", H5T_STD_U8LE, H5T_NATIVE_UINT8, {1, 0});
+    h5_dataset_1d<std::uint32_t>(g.get(), "t", H5T_STD_U32LE, H5T_NATIVE_UINT32, {100, 200});
+    h5_dataset_1d<std::uint64_t>(f.get(), "ms_to_idx", H5T_STD_U64LE, H5T_NATIVE_UINT64, {0, 2});
+    const std::int64_t t_offset = std::numeric_limits<std::int64_t>::max() - 50;
+    h5::H5Id space = h5::check(H5Screate(H5S_SCALAR), "space");
+    h5::H5Id ds = h5::check(H5Dcreate2(f.get(), "t_offset", H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                                       H5P_DEFAULT), "t_offset");
+    h5::check(H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &t_offset), "t_offset");
+  }
+  // Wrapped (undefined behaviour before the sum was checked), the time came out near INT64_MIN.
+  CHECK_THROWS_WITH(read_all(path), Catch::StartsWith(path + ": offset 0: row 0: t 100 + t_offset 9223372036854775757 "
+                                                             "overflows 64 bits"));
 }

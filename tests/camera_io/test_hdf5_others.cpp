@@ -9,30 +9,18 @@ using yelan::camera::Event;
 namespace h5 = yelan::camera::h5;
 using namespace yelan::test;
 
-namespace {
-
-template <typename T>
-void dataset_1d(hid_t loc, const char* name, hid_t file_type, hid_t mem_type, const std::vector<T>& v) {
-  hsize_t n[1] = {v.size()};
-  h5::H5Id space = h5::check(H5Screate_simple(1, n, nullptr), "space");
-  h5::H5Id ds = h5::check(H5Dcreate2(loc, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name);
-  h5::check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), name);
-}
-
-}  // namespace
-
 TEST_CASE("DSEC layout: t relative to t_offset, seek through ms_to_idx", "[io][h5][dsec]") {
   ScratchDir dir("dsec");
   const std::string path = dir.file("events.h5");
   {
     h5::H5Id f = h5::create_file(path);
     h5::H5Id g = h5::create_group(f.get(), "events");
-    dataset_1d<std::uint16_t>(g.get(), "x", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 639, 5, 7});
-    dataset_1d<std::uint16_t>(g.get(), "y", H5T_STD_U16LE, H5T_NATIVE_UINT16, {2, 479, 6, 8});
-    dataset_1d<std::uint8_t>(g.get(), "p", H5T_STD_U8LE, H5T_NATIVE_UINT8, {1, 0, 1, 0});
-    dataset_1d<std::uint32_t>(g.get(), "t", H5T_STD_U32LE, H5T_NATIVE_UINT32, {10, 999, 1500, 3001});
+    h5_dataset_1d<std::uint16_t>(g.get(), "x", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 639, 5, 7});
+    h5_dataset_1d<std::uint16_t>(g.get(), "y", H5T_STD_U16LE, H5T_NATIVE_UINT16, {2, 479, 6, 8});
+    h5_dataset_1d<std::uint8_t>(g.get(), "p", H5T_STD_U8LE, H5T_NATIVE_UINT8, {1, 0, 1, 0});
+    h5_dataset_1d<std::uint32_t>(g.get(), "t", H5T_STD_U32LE, H5T_NATIVE_UINT32, {10, 999, 1500, 3001});
     // ms_to_idx[k]: first event with t >= 1000 k.
-    dataset_1d<std::uint64_t>(f.get(), "ms_to_idx", H5T_STD_U64LE, H5T_NATIVE_UINT64, {0, 2, 3, 3, 4});
+    h5_dataset_1d<std::uint64_t>(f.get(), "ms_to_idx", H5T_STD_U64LE, H5T_NATIVE_UINT64, {0, 2, 3, 3, 4});
     const std::int64_t t_offset = 47'000'000'000LL;
     h5::H5Id space = h5::check(H5Screate(H5S_SCALAR), "space");
     h5::H5Id ds = h5::check(H5Dcreate2(f.get(), "t_offset", H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT,
@@ -73,10 +61,10 @@ TEST_CASE("HDF5 files with mismatched or missing columns are refused", "[io][h5]
   {
     h5::H5Id f = h5::create_file(path);
     h5::H5Id g = h5::create_group(f.get(), "events");
-    dataset_1d<std::uint16_t>(g.get(), "x", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2, 3});
-    dataset_1d<std::uint16_t>(g.get(), "y", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2});
-    dataset_1d<std::uint8_t>(g.get(), "p", H5T_STD_U8LE, H5T_NATIVE_UINT8, {1, 0, 1});
-    dataset_1d<std::int64_t>(g.get(), "t", H5T_STD_I64LE, H5T_NATIVE_INT64, {1, 2, 3});
+    h5_dataset_1d<std::uint16_t>(g.get(), "x", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2, 3});
+    h5_dataset_1d<std::uint16_t>(g.get(), "y", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, 2});
+    h5_dataset_1d<std::uint8_t>(g.get(), "p", H5T_STD_U8LE, H5T_NATIVE_UINT8, {1, 0, 1});
+    h5_dataset_1d<std::int64_t>(g.get(), "t", H5T_STD_I64LE, H5T_NATIVE_INT64, {1, 2, 3});
   }
   CHECK_THROWS_WITH(yelan::camera::open_event_file(path), path + ": offset 0: /events/y has 2 rows but /events/t has 3");
   {
