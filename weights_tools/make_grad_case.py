@@ -27,19 +27,10 @@ def main(argv=None):
     torch = require_torch()
     import h5py
     import numpy as np
-    from weights_tools.h5weights import read_weights
-    from weights_tools.reference import load_networks
-    from weights_tools.reference.config import config_from_dict
+    from weights_tools.reference import case_networks
     from weights_tools.reference.losses import hpe_loss, mask_loss
 
-    torch.set_num_threads(1)
-    cfg_dict, groups = read_weights(a.weights)
-    cfg = config_from_dict(cfg_dict, a.weights)
-    nets = load_networks(cfg, groups)
-    for g, net in nets.items():
-        net.train(not a.eval)
-        if a.double:
-            net.double()
+    cfg, nets = case_networks(a.weights, training=not a.eval, double=a.double)
     gen = torch.Generator().manual_seed(a.seed)
     S, J = cfg.window, cfg.joints
     x = torch.rand((S, cfg.channels, cfg.height, cfg.width), generator=gen)

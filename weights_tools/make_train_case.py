@@ -26,20 +26,11 @@ def main(argv=None):
     torch = require_torch()
     import h5py
     import numpy as np
-    from weights_tools.h5weights import read_weights
-    from weights_tools.reference import load_networks
-    from weights_tools.reference.config import config_from_dict
+    from weights_tools.reference import case_networks
     from weights_tools.reference.losses import hpe_loss, mask_loss
 
-    torch.set_num_threads(1)
-    cfg_dict, groups = read_weights(a.weights)
-    cfg = config_from_dict(cfg_dict, a.weights)
-    nets = load_networks(cfg, groups)
-    for g, net in nets.items():
-        net.train()
-        if a.double:
-            net.double()
-        opts[g] = torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5)
+    cfg, nets = case_networks(a.weights, training=True, double=a.double)
+    opts = {g: torch.optim.Adam(net.parameters(), lr=1e-3, weight_decay=1e-5) for g, net in nets.items()}
     gen = torch.Generator().manual_seed(a.seed)
     S, J = cfg.window, cfg.joints
     losses = {"mask": [], "pose": []}

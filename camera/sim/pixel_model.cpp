@@ -98,6 +98,7 @@ int advance_chunk(int n, float dt, float t1_rel, const float* __restrict alpha,
 
 }  // namespace
 
+// The presets set each noise field by name: tables of values, deliberately alike.
 PixelParams pixel_params_clean() {
   PixelParams p;
   p.sigma_threshold = 0;

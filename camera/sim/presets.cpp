@@ -123,6 +123,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     if (j.contains("background") && !parse_background(v = j.at("background").get<std::string>(), s.scene.background))
       throw std::invalid_argument("background '" + v + "' is not static|dynamic");
     if (j.contains("occluders")) s.scene.occluders = j.at("occluders").get<bool>();
+    // One line per JSON key, as SPEC names them: a table of fields, deliberately spelled out.
     num(j, "duration_s", s.duration_s);
     if (j.contains("seed")) s.seed = j.at("seed").get<std::uint64_t>();
     num(j, "label_hz", s.label_hz);

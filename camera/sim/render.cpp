@@ -595,7 +595,7 @@ struct Renderer::Impl {
           const double DD = D.squaredNorm();
           double bt = s_depth[i];
           int bid = s_id[i], bpart = 0;
-          cast(dyn, tile, x, y, D, DD, S, bt, bid, bpart);
+          cast(dyn, (y / kTile) * ntx + tx, x, y, D, DD, S, bt, bid, bpart);
           c_id[i] = bid, c_t[i] = bt, c_part[i] = std::uint8_t(bpart);
         }
       }

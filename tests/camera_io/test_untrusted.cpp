@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <signal.h>
+#include <sys/mman.h>
 
 #include <atomic>
 #include <cstdio>
@@ -140,7 +141,7 @@ TEST_CASE("the real DAVIS recording converted to ours, two known libhdf5 crashes
   }
 }
 
-TEST_CASE("vetting in a child: a read that allocates and touches 8 GiB comes back as an error", "[io][h5][untrusted]") {
+TEST_CASE("vetting in a child: a read past the memory budget is an error, the budget on top of the caller's own", "[io][h5][untrusted]") {
 #if defined(__SANITIZE_ADDRESS__)
   const bool asan = true;
 #elif defined(__has_feature)
@@ -159,14 +160,26 @@ TEST_CASE("vetting in a child: a read that allocates and touches 8 GiB comes bac
   test::ScratchDir d("untrusted-memory");
   const std::string path = d.file("greedy.h5");
   test::write_text(path, "greedy");
-  // The default limits, as every real read gets them: 4 GiB of address space.
-  CHECK_THROWS_WITH(camera::vet_in_child(path, [] {
-                      constexpr std::size_t kBlock = std::size_t(64) << 20;
-                      std::vector<std::unique_ptr<char[]>> held;
-                      for (int i = 0; i < 128; ++i) {  // 128 x 64 MiB = 8 GiB, every page written
-                        held.emplace_back(new char[kBlock]);
-                        std::memset(held.back().get(), 1, kBlock);
-                      }
-                    }),
-                    Catch::Contains(path) && Catch::Contains("reading it needs more than 4096 MiB"));
+  camera::UntrustedLimits small;
+  small.memory_bytes = std::size_t(256) << 20;
+  auto greedy = [] {  // 1 GiB, every page written
+    constexpr std::size_t kBlock = std::size_t(64) << 20;
+    std::vector<std::unique_ptr<char[]>> held;
+    for (int i = 0; i < 16; ++i) {
+      held.emplace_back(new char[kBlock]);
+      std::memset(held.back().get(), 1, kBlock);
+    }
+  };
+  CHECK_THROWS_WITH(camera::vet_in_child(path, greedy, small),
+                    Catch::Contains(path) && Catch::Contains("reading it needs more than 256 MiB"));
+  // The budget is on top of what the caller holds: a process with more address space than
+  // the default 4 GiB (a training) still vets files (the child inherits its mappings).
+  const std::size_t reserved = std::size_t(6) << 30;
+  void* big = ::mmap(nullptr, reserved, PROT_NONE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+  REQUIRE(big != MAP_FAILED);
+  const std::string fine = d.file("fine.h5");
+  test::write_text(fine, "fine");
+  CHECK_NOTHROW(camera::vet_in_child(fine, [] { std::vector<char> some(std::size_t(16) << 20, 1); }));
+  CHECK_THROWS_WITH(camera::vet_in_child(path, greedy, small), Catch::Contains("reading it needs more than 256 MiB"));
+  ::munmap(big, reserved);
 }

@@ -9,7 +9,7 @@ from .pose_net import PoseNet
 from .dsnt import dsnt, joints_from_heatmaps
 
 __all__ = ["ModelConfig", "load_config", "CONFIG_DIR", "MaskNet", "PoseNet", "dsnt",
-           "joints_from_heatmaps", "build_networks", "load_networks"]
+           "joints_from_heatmaps", "build_networks", "load_networks", "case_networks"]
 
 
 def build_networks(cfg):
@@ -31,3 +31,21 @@ def load_networks(cfg, groups):
                 sd[k] = sd[k].to(torch.int64)
         net.load_state_dict(sd)
     return nets
+
+
+def case_networks(weights, training, double=False):
+    """What a parity case maker starts from: (cfg, {"mask": MaskNet, "pose": PoseNet}) of our
+    weights file, on one thread (PyTorch's reductions then run in a fixed order), in training
+    or eval mode, in float64 where asked (a yardstick for float32's own error)."""
+    import torch
+    from weights_tools.h5weights import read_weights
+    from .config import config_from_dict
+    torch.set_num_threads(1)
+    cfg_dict, groups = read_weights(weights)
+    cfg = config_from_dict(cfg_dict, weights)
+    nets = load_networks(cfg, groups)
+    for net in nets.values():
+        net.train(training)
+        if double:
+            net.double()
+    return cfg, nets

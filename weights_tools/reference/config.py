@@ -92,6 +92,7 @@ def config_from_dict(d, where="config"):
         if not isinstance(d.get(sec), dict):
             raise ConfigError(f"{where}: missing object '{sec}'")
     i, m, p = d["input"], d["mask"], d["pose"]
+    # One line per key, as the C++ reader (engine/model_config.cpp) checks them: a table, deliberately spelled out.
     cfg = ModelConfig(
         name=_get(d, where, "name", str),
         channels=_get(i, where + ".input", "channels", int),
