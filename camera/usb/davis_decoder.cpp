@@ -3,10 +3,9 @@
 namespace yelan::camera::usb {
 namespace {
 
-// Word codes, bits 14:12 of a word whose bit 15 is clear.
+// Word codes, bits 14:12 of a word whose bit 15 is clear (7, the wrap, is WordDecoder's).
 enum Code : std::uint16_t {
-  kSpecial = 0, kRow = 1, kColumnOff = 2, kColumnOn = 3, kApsSample = 4, kMisc8 = 5,
-  kMisc10 = 6, kWrap = 7
+  kSpecial = 0, kRow = 1, kColumnOff = 2, kColumnOn = 3, kApsSample = 4, kMisc8 = 5, kMisc10 = 6
 };
 
 // Special events (code 0), by their 12-bit data.
@@ -22,10 +21,7 @@ enum Special : std::uint16_t {
 DavisDecoder::DavisDecoder(std::uint16_t width, std::uint16_t height, bool invert_xy)
     : WordDecoder(width, height, invert_xy) {}
 
-void DavisDecoder::decode_word(std::uint16_t word, std::vector<Event>& out) {
-  if (timestamp_word(word)) return;
-  const std::uint16_t code = (word >> 12) & 0x7;
-  const std::uint16_t data = word & 0x0FFF;
+void DavisDecoder::decode_code(std::uint16_t code, std::uint16_t data, std::vector<Event>& out) {
   switch (code) {
     case kSpecial:
       special(data);
@@ -64,10 +60,6 @@ void DavisDecoder::decode_word(std::uint16_t word, std::vector<Event>& out) {
       ++(sub == 0 || sub == 3 ? stats_.imu_words : sub <= 2 ? stats_.aps_words : stats_.unknown_words);
       return;
     }
-    case kWrap:
-      ++stats_.timestamp_wraps;
-      clock_.on_wrap(data);
-      return;
   }
 }
 

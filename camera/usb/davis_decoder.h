@@ -14,9 +14,9 @@ class DavisDecoder : public WordDecoder<DavisDecoder> {
   // invert_xy swaps the two axes (DVS orientation bit 2) for rotated sensors.
   explicit DavisDecoder(std::uint16_t width = 346, std::uint16_t height = 260, bool invert_xy = false);
 
-  void decode_word(std::uint16_t word, std::vector<Event>& out);
-
  private:
+  friend class WordDecoder<DavisDecoder>;  // the framing hands it every word but timestamps and wraps
+  void decode_code(std::uint16_t code, std::uint16_t data, std::vector<Event>& out);
   void special(std::uint16_t data);
 
   int last_y_ = -1;  // row address of the events that follow; -1 before the first one

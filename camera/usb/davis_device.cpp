@@ -1,16 +1,12 @@
 #include "camera/usb/davis_device.h"
 
-#include <cmath>
-#include <thread>
-
 #include "camera/usb/protocol.h"
 
 namespace yelan::camera::usb {
 namespace {
 
-// Data stream transfers: libcaer's defaults for FX3 boards.
-constexpr int kTransferCount = 8;
-constexpr std::size_t kTransferSize = 8192;
+constexpr InivationModel kDavis346 = {"DAVIS", is_davis346_chip, "the DAVIS346: 4, 5, 9", /*has_aps=*/true,
+                                      /*chip_runs_while_streaming=*/true};
 
 // The DAVIS346 default biases (iniVation's published defaults), in the order sent.
 struct BiasWord {
@@ -54,44 +50,10 @@ std::vector<BiasWord> davis346_chip_register() {
 }  // namespace
 
 DavisDevice::DavisDevice(Transport& transport, Sleep sleep)
-    : transport_(transport), sleep_(std::move(sleep)) {
-  if (!sleep_) sleep_ = [](std::chrono::milliseconds d) { std::this_thread::sleep_for(d); };
-}
-
-DavisDevice::~DavisDevice() { stop(); }
-
-void DavisDevice::config_set(std::uint8_t module, std::uint8_t param, std::uint32_t value) {
-  config_write(transport_, module, param, value);
-}
-
-std::uint32_t DavisDevice::config_get(std::uint8_t module, std::uint8_t param) {
-  return config_read(transport_, module, param);
-}
-
-const DavisInfo& DavisDevice::open() {
-  DavisInfo info;
-  info.logic_version = config_get(module::sysinfo, sysinfo::logic_version);
-  info.chip_id = config_get(module::sysinfo, sysinfo::chip_identifier);
-  if (!is_davis346_chip(info.chip_id))
-    throw UsbError("unsupported DAVIS chip identifier " + std::to_string(info.chip_id) +
-                   " (this driver knows the DAVIS346: 4, 5, 9)");
-  const std::uint32_t columns = config_get(module::dvs, dvs::size_columns);
-  const std::uint32_t rows = config_get(module::dvs, dvs::size_rows);
-  if (columns == 0 || rows == 0 || columns > 1024 || rows > 1024)
-    throw UsbError("device reports an absurd DVS size " + std::to_string(columns) + "x" + std::to_string(rows));
-  info.invert_xy = (config_get(module::dvs, dvs::orientation) & 0x04) != 0;
-  info.width = static_cast<std::uint16_t>(info.invert_xy ? rows : columns);
-  info.height = static_cast<std::uint16_t>(info.invert_xy ? columns : rows);
-  const double usb_clock = config_get(module::sysinfo, sysinfo::usb_clock);
-  const double deviation = config_get(module::sysinfo, sysinfo::clock_deviation);
-  info.usb_clock_mhz = usb_clock * deviation / 1000.0;
-  info_ = info;
-  decoder_ = DavisDecoder(static_cast<std::uint16_t>(columns), static_cast<std::uint16_t>(rows), info.invert_xy);
-  return info_;
-}
+    : InivationDevice(transport, std::move(sleep), kDavis346) {}
 
 void DavisDevice::configure(const DavisConfig& config) {
-  if (info_.width == 0) throw UsbError("configure() before open()");
+  require_open("configure()");
   config_ = config;
   for (const BiasWord& b : davis346_biases()) config_set(module::chip, b.address, b.value);
   for (const BiasWord& b : davis346_chip_register()) config_set(module::chip, b.address, b.value);
@@ -101,70 +63,16 @@ void DavisDevice::configure(const DavisConfig& config) {
   config_set(module::mux, mux::drop_dvs_on_stall, 1);
   config_set(module::dvs, dvs::wait_on_stall, 0);
   config_set(module::dvs, dvs::external_aer_control, 0);
-  // The early-packet delay is given to the FPGA in USB clock cycles.
-  const double cycles = std::round(config.early_packet_delay_us * info_.usb_clock_mhz);
-  config_set(module::usb, usbmod::early_packet_delay, static_cast<std::uint32_t>(cycles));
+  set_early_packet_delay(config.early_packet_delay_us);
 }
 
-// Producers first when stopping (DVS, APS, IMU, external input), then the multiplexer,
-// timestamp generator, USB FIFO, and last the chip's bias generator.
-void DavisDevice::stop_modules() {
-  config_set(module::dvs, dvs::run, 0);
-  config_set(module::aps, aps::run, 0);
-  config_set(module::imu, imu::run_accelerometer, 0);
-  config_set(module::imu, imu::run_gyroscope, 0);
-  config_set(module::imu, imu::run_temperature, 0);
-  config_set(module::extinput, extinput::run_detector, 0);
-  config_set(module::mux, mux::run, 0);
-  config_set(module::mux, mux::timestamp_run, 0);
-  config_set(module::usb, usbmod::run, 0);
-  config_set(module::mux, mux::run_chip, 0);
-}
-
-void DavisDevice::start(EventSink sink) {
-  if (info_.width == 0) throw UsbError("start() before open()");
-  if (streaming_) throw UsbError("start() while already streaming");
-  // Leave any earlier, unclean session behind: everything off, let FPGA buffers drain,
-  // reset the data endpoint.
-  stop_modules();
-  sleep_(std::chrono::milliseconds(10));
-  transport_.clear_halt(kDataEndpoint);
-  error_.clear();
-  transport_.start_bulk_in(
-      kDataEndpoint, kTransferSize, kTransferCount,
-      [this, sink = std::move(sink)](std::span<const std::uint8_t> bytes) {
-        batch_.clear();
-        decoder_.feed(bytes, batch_);
-        if (!batch_.empty() && sink) sink(batch_);
-      },
-      [this](StreamState, const std::string& why) { error_ = why; });
-  streaming_ = true;
-  config_set(module::mux, mux::run_chip, 1);
-  sleep_(std::chrono::milliseconds(200));  // biases settle
-  config_set(module::usb, usbmod::run, 1);
-  config_set(module::mux, mux::timestamp_run, 1);
-  config_set(module::mux, mux::run, 1);
-  sleep_(std::chrono::milliseconds(50));  // data path ready
-  config_set(module::dvs, dvs::run, 1);
+void DavisDevice::start_sensor() {
   if (config_.aps) config_set(module::aps, aps::run, 1);
   if (config_.imu) {
     config_set(module::imu, imu::run_accelerometer, 1);
     config_set(module::imu, imu::run_gyroscope, 1);
     config_set(module::imu, imu::run_temperature, 1);
   }
-}
-
-void DavisDevice::stop() noexcept {
-  if (!streaming_) return;
-  streaming_ = false;
-  if (transport_.state() != StreamState::disconnected) {
-    try {
-      stop_modules();
-    } catch (const std::exception& e) {
-      if (error_.empty()) error_ = std::string("stopping the device: ") + e.what();
-    }
-  }
-  transport_.stop_bulk_in();
 }
 
 }  // namespace yelan::camera::usb

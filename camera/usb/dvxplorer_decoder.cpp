@@ -5,10 +5,7 @@ namespace yelan::camera::usb {
 DvxplorerDecoder::DvxplorerDecoder(std::uint16_t width, std::uint16_t height, bool invert_xy)
     : WordDecoder(width, height, invert_xy) {}
 
-void DvxplorerDecoder::decode_word(std::uint16_t word, std::vector<Event>& out) {
-  if (timestamp_word(word)) return;
-  const std::uint16_t code = (word >> 12) & 0x7;
-  const std::uint16_t data = word & 0x0FFF;
+void DvxplorerDecoder::decode_code(std::uint16_t code, std::uint16_t data, std::vector<Event>& out) {
   switch (code) {
     case 0:  // special events: same numbering as DAVIS, without the frame markers
       switch (data) {
@@ -60,10 +57,6 @@ void DvxplorerDecoder::decode_word(std::uint16_t word, std::vector<Event>& out) 
       return;
     case 6:
       ++stats_.unknown_words;
-      return;
-    case 7:
-      ++stats_.timestamp_wraps;
-      clock_.on_wrap(data);
       return;
   }
 }

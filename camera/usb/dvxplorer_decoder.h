@@ -13,11 +13,11 @@ class DvxplorerDecoder : public WordDecoder<DvxplorerDecoder> {
  public:
   explicit DvxplorerDecoder(std::uint16_t width = 640, std::uint16_t height = 480, bool invert_xy = false);
 
-  void decode_word(std::uint16_t word, std::vector<Event>& out);
-
   std::uint64_t frame_starts() const { return frame_starts_; }
 
  private:
+  friend class WordDecoder<DvxplorerDecoder>;  // the framing hands it every word but timestamps and wraps
+  void decode_code(std::uint16_t code, std::uint16_t data, std::vector<Event>& out);
   void group(std::uint16_t data, int base_y, std::vector<Event>& out);
 
   int last_x_ = -1, group1_y_ = -1, group2_y_ = -1;

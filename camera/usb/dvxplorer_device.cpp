@@ -1,107 +1,95 @@
 #include "camera/usb/dvxplorer_device.h"
 
-#include <cmath>
-#include <thread>
-
 #include "camera/usb/protocol.h"
 
 namespace yelan::camera::usb {
 namespace {
 
-constexpr int kTransferCount = 8;
-constexpr std::size_t kTransferSize = 8192;
+bool is_dvxplorer_chip(std::uint32_t id) { return id == dvx::chip_dvxplorer || id == dvx::chip_dvxplorer_lite; }
+
+constexpr InivationModel kDvxplorer = {"DVXplorer", is_dvxplorer_chip, "20: DVXplorer, 19: DVXplorer Lite",
+                                       /*has_aps=*/false, /*chip_runs_while_streaming=*/false};
+
+// One 8-bit sensor register and its value. The tables below are iniVation's values, kept
+// literal and in libcaer's order so that they can be checked against it line by line.
+struct SensorWrite {
+  std::uint16_t reg;
+  std::uint8_t value;
+};
+
+// Bias generator reset (OTP trim), then its pins enabled.
+constexpr SensorWrite kBiasEnable[] = {
+    {dvx::bias_otp_trim, 0x24},  {dvx::bias_pins_dbgp, 0x07}, {dvx::bias_pins_dbgn, 0xFF},
+    {dvx::bias_pins_bufp, 0x03}, {dvx::bias_pins_bufn, 0x7F}, {dvx::bias_pins_dob, 0x00}};
+
+// iniVation's "default" point of the five simple bias settings.
+constexpr SensorWrite kSimpleBiases[] = {
+    {dvx::bias_amp, 0x04},          {dvx::bias_range_loga_logd, 0x14}, {dvx::bias_range_log_sf_on_rst, 0x06},
+    {dvx::bias_level_sf_off, 0x7D}, {dvx::bias_on, 0x00},              {dvx::bias_off, 0x08}};
+
+// System clock divided by 10, parallel output on, MGROUP compression (the 8-pixel group
+// words), timestamp sub-unit, R/AY signals enabled, boot sequence, fine timing counts.
+constexpr SensorWrite kOutputFormat[] = {
+    {dvx::clock_divider_sys, 0xA0}, {dvx::parallel_out_control, 0x00}, {dvx::parallel_out_enable, 0x01},
+    {dvx::packet_format, 0x80},     {dvx::timestamp_subunit, 0x31},    {dvx::mode_control, 0x0C},
+    {dvx::boot_sequence, 0x08},     {dvx::timing_gh_count_fine, 50},   {dvx::timing_grs_count_fine, 50},
+    {dvx::timing_grs_end_fine, 50}, {dvx::spatial_histogram_off, 0x01}};
+
+// Readout timing in sensor clock cycles; multi-byte values high byte first. The maximum
+// event number is the next-select start minus 5.
+constexpr SensorWrite kReadoutTiming[] = {
+    {dvx::timing_gh_count, 0x00}, {dvx::timing_gh_count + 1, 0x00}, {dvx::timing_gh_count + 2, 0x02},
+    {dvx::timing_grs_count, 0x00}, {dvx::timing_grs_count + 1, 0x00}, {dvx::timing_grs_count + 2, 0x00},
+    {dvx::timing_grs_end, 0x00}, {dvx::timing_grs_end + 1, 0x00}, {dvx::timing_grs_end + 2, 0x01},
+    {dvx::timing_first_selx_start, 4}, {dvx::timing_selx_width, 6}, {dvx::timing_ay_start, 4},
+    {dvx::timing_ay_end, 6}, {dvx::timing_r_start, 8}, {dvx::timing_r_end, 10},
+    {dvx::timing_next_selx_start, 0}, {dvx::timing_next_selx_start + 1, 15}, {dvx::timing_max_event_num, 10},
+    {dvx::timing_next_gh_cnt, 10}, {dvx::timing_read_time_interval, 48000 >> 8},
+    {dvx::timing_read_time_interval + 1, 48000 & 0xFF}};
+
+// Activity-decision filter bypassed, its thresholds at their defaults (300 / 20, rate 1,
+// time 3, max 300).
+constexpr SensorWrite kActivityFilterBypassed[] = {
+    {dvx::activity_bypass, 0x01}, {dvx::activity_pos_threshold, 300 >> 8},
+    {dvx::activity_pos_threshold + 1, 300 & 0xFF}, {dvx::activity_neg_threshold, 0},
+    {dvx::activity_neg_threshold + 1, 20}, {dvx::activity_dec_rate, 1}, {dvx::activity_dec_time, 3},
+    {dvx::activity_pos_max_count, 300 >> 8}, {dvx::activity_pos_max_count + 1, 300 & 0xFF}};
+
+void write_sensor(InivationDevice& device, std::span<const SensorWrite> table) {
+  for (const SensorWrite& w : table) device.config_set(dvx::sensor_module, w.reg, w.value);
+}
 
 }  // namespace
 
 DvxplorerDevice::DvxplorerDevice(Transport& transport, Sleep sleep)
-    : transport_(transport), sleep_(std::move(sleep)) {
-  if (!sleep_) sleep_ = [](std::chrono::milliseconds d) { std::this_thread::sleep_for(d); };
-}
-
-DvxplorerDevice::~DvxplorerDevice() {
-  stop();
-  if (powered_ && transport_.state() != StreamState::disconnected) {
-    try {
-      config_write(transport_, module::mux, mux::run_chip, 0);  // sensor back in reset
-    } catch (const std::exception&) {
-      // The device went away while closing: nothing left to put in reset.
-    }
-  }
-}
+    : InivationDevice(transport, std::move(sleep), kDvxplorer) {}
 
 void DvxplorerDevice::sensor(std::uint16_t reg, std::uint32_t value) {
-  config_write(transport_, dvx::sensor_module, reg, value & 0xFF);
+  config_set(dvx::sensor_module, reg, value & 0xFF);
 }
 
 void DvxplorerDevice::sensor_update(std::uint16_t reg, std::uint32_t clear, std::uint32_t set) {
-  const std::uint32_t now = config_read(transport_, dvx::sensor_module, reg);
+  const std::uint32_t now = config_get(dvx::sensor_module, reg);
   sensor(reg, (now & ~clear) | set);
 }
 
-// iniVation's "default" point of the five simple bias settings.
-void DvxplorerDevice::simple_biases() {
-  sensor(dvx::bias_amp, 0x04);
-  sensor(dvx::bias_range_loga_logd, 0x14);
-  sensor(dvx::bias_range_log_sf_on_rst, 0x06);
-  sensor(dvx::bias_level_sf_off, 0x7D);
-  sensor(dvx::bias_on, 0x00);
-  sensor(dvx::bias_off, 0x08);
-}
-
-const DvxplorerInfo& DvxplorerDevice::open() {
-  DvxplorerInfo info;
-  info.logic_version = config_read(transport_, module::sysinfo, sysinfo::logic_version);
-  info.chip_id = config_read(transport_, module::sysinfo, sysinfo::chip_identifier);
-  if (info.chip_id != dvx::chip_dvxplorer && info.chip_id != dvx::chip_dvxplorer_lite)
-    throw UsbError("unsupported DVXplorer chip identifier " + std::to_string(info.chip_id) +
-                   " (this driver knows 20: DVXplorer, 19: DVXplorer Lite)");
-  const std::uint32_t columns = config_read(transport_, module::dvs, dvs::size_columns);
-  const std::uint32_t rows = config_read(transport_, module::dvs, dvs::size_rows);
-  if (columns == 0 || rows == 0 || columns > 1024 || rows > 1024)
-    throw UsbError("device reports an absurd DVS size " + std::to_string(columns) + "x" + std::to_string(rows));
-  info.invert_xy = (config_read(transport_, module::dvs, dvs::orientation) & 0x04) != 0;
-  info.width = static_cast<std::uint16_t>(info.invert_xy ? rows : columns);
-  info.height = static_cast<std::uint16_t>(info.invert_xy ? columns : rows);
-  const double usb_clock = config_read(transport_, module::sysinfo, sysinfo::usb_clock);
-  const double deviation = config_read(transport_, module::sysinfo, sysinfo::clock_deviation);
-  info.usb_clock_mhz = usb_clock * deviation / 1000.0;
-  info_ = info;
-  decoder_ = DvxplorerDecoder(static_cast<std::uint16_t>(columns), static_cast<std::uint16_t>(rows), info.invert_xy);
-
-  // Sensor bring-up: out of reset, let it start, then bias generator and output format.
-  config_write(transport_, module::mux, mux::run_chip, 1);
-  powered_ = true;
-  sleep_(std::chrono::milliseconds(10));
-  sensor(dvx::bias_otp_trim, 0x24);  // bias reset
-  sensor(dvx::bias_pins_dbgp, 0x07);  // bias enable
-  sensor(dvx::bias_pins_dbgn, 0xFF);
-  sensor(dvx::bias_pins_bufp, 0x03);
-  sensor(dvx::bias_pins_bufn, 0x7F);
-  sensor(dvx::bias_pins_dob, 0x00);
-  simple_biases();
-  sensor(dvx::clock_divider_sys, 0xA0);  // system clock divided by 10
-  sensor(dvx::parallel_out_control, 0x00);
-  sensor(dvx::parallel_out_enable, 0x01);
-  sensor(dvx::packet_format, 0x80);  // MGROUP compression: the 8-pixel group words
-  sensor(dvx::timestamp_subunit, 0x31);
-  sensor(dvx::mode_control, 0x0C);  // R/AY signals enabled
-  sensor(dvx::boot_sequence, 0x08);
-  sensor(dvx::timing_gh_count_fine, 50);
-  sensor(dvx::timing_grs_count_fine, 50);
-  sensor(dvx::timing_grs_end_fine, 50);
-  sensor(dvx::spatial_histogram_off, 0x01);
-  return info_;
+// Out of reset, let the sensor start, then bias generator and output format.
+void DvxplorerDevice::bring_up() {
+  power_chip();
+  wait(std::chrono::milliseconds(10));
+  write_sensor(*this, kBiasEnable);
+  write_sensor(*this, kSimpleBiases);
+  write_sensor(*this, kOutputFormat);
 }
 
 void DvxplorerDevice::configure() {
-  if (info_.width == 0) throw UsbError("configure() before open()");
-  const bool lite = info_.chip_id == dvx::chip_dvxplorer_lite;
+  require_open("configure()");
+  const bool lite = info().chip_id == dvx::chip_dvxplorer_lite;
   // FPGA: drop external-input events when USB is behind; keep DVS events (stall instead).
-  config_write(transport_, module::mux, mux::drop_extinput_on_stall, 1);
-  config_write(transport_, module::mux, mux::drop_dvs_on_stall, 0);
-  config_write(transport_, module::usb, usbmod::early_packet_delay,
-               static_cast<std::uint32_t>(std::round(1000.0 * info_.usb_clock_mhz)));  // 1 ms
-  simple_biases();
+  config_set(module::mux, mux::drop_extinput_on_stall, 1);
+  config_set(module::mux, mux::drop_dvs_on_stall, 0);
+  set_early_packet_delay(1000);
+  write_sensor(*this, kSimpleBiases);
   sensor(dvx::external_trigger, 0);                  // external trigger resets timestamps
   sensor_update(dvx::mode_control, 0x01, 0x01);      // global hold on
   sensor_update(dvx::mode_control, 0x02, 0x00);      // global reset off
@@ -117,88 +105,26 @@ void DvxplorerDevice::configure() {
     sensor(static_cast<std::uint16_t>(dvx::area_block + 2 * i), 0x7F);
     sensor(static_cast<std::uint16_t>(dvx::area_block + 2 * i + 1), 0xFF);
   }
-  // Readout timing (sensor clock cycles).
-  sensor(dvx::timing_gh_count, 0x00), sensor(dvx::timing_gh_count + 1, 0x00), sensor(dvx::timing_gh_count + 2, 0x02);
-  sensor(dvx::timing_grs_count, 0x00), sensor(dvx::timing_grs_count + 1, 0x00), sensor(dvx::timing_grs_count + 2, 0x00);
-  sensor(dvx::timing_grs_end, 0x00), sensor(dvx::timing_grs_end + 1, 0x00), sensor(dvx::timing_grs_end + 2, 0x01);
-  sensor(dvx::timing_first_selx_start, 4);
-  sensor(dvx::timing_selx_width, 6);
-  sensor(dvx::timing_ay_start, 4);
-  sensor(dvx::timing_ay_end, 6);
-  sensor(dvx::timing_r_start, 8);
-  sensor(dvx::timing_r_end, 10);
-  sensor(dvx::timing_next_selx_start, 0), sensor(dvx::timing_next_selx_start + 1, 15);
-  sensor(dvx::timing_max_event_num, 10);  // next-select - 5
-  sensor(dvx::timing_next_gh_cnt, 10);
-  sensor(dvx::timing_read_time_interval, 48000 >> 8), sensor(dvx::timing_read_time_interval + 1, 48000 & 0xFF);
+  write_sensor(*this, kReadoutTiming);
   // Cropper bypassed, its window the full array.
   sensor(dvx::cropper_bypass, 0x01);
-  const unsigned last_row = info_.height - 1u, last_col = info_.width - 1u;
+  const unsigned last_row = info().height - 1u, last_col = info().width - 1u;
   sensor(dvx::cropper_y_start_group, 0);
   sensor(dvx::cropper_y_start_mask, 0xFF);
   sensor(dvx::cropper_y_end_group, last_row / 8);
   sensor(dvx::cropper_y_end_mask, 0xFFu >> (7 - last_row % 8));
   sensor(dvx::cropper_x_start, 0), sensor(dvx::cropper_x_start + 1, 0);
   sensor(dvx::cropper_x_end, last_col >> 8), sensor(dvx::cropper_x_end + 1, last_col & 0xFF);
-  // Activity-decision filter bypassed (thresholds at their defaults).
-  sensor(dvx::activity_bypass, 0x01);
-  sensor(dvx::activity_pos_threshold, 300 >> 8), sensor(dvx::activity_pos_threshold + 1, 300 & 0xFF);
-  sensor(dvx::activity_neg_threshold, 0), sensor(dvx::activity_neg_threshold + 1, 20);
-  sensor(dvx::activity_dec_rate, 1);
-  sensor(dvx::activity_dec_time, 3);
-  sensor(dvx::activity_pos_max_count, 300 >> 8), sensor(dvx::activity_pos_max_count + 1, 300 & 0xFF);
+  write_sensor(*this, kActivityFilterBypassed);
   sensor(dvx::digital_restart, 0x02);  // restart the sensor's digital block with all this
 }
 
-void DvxplorerDevice::stop_modules() {
-  config_write(transport_, module::dvs, dvs::run, 0);
-  config_write(transport_, module::imu, imu::run_accelerometer, 0);
-  config_write(transport_, module::imu, imu::run_gyroscope, 0);
-  config_write(transport_, module::imu, imu::run_temperature, 0);
-  config_write(transport_, module::extinput, extinput::run_detector, 0);
-  config_write(transport_, module::mux, mux::run, 0);
-  config_write(transport_, module::mux, mux::timestamp_run, 0);
-  config_write(transport_, module::usb, usbmod::run, 0);
-}
-
-void DvxplorerDevice::start(EventSink sink) {
-  if (info_.width == 0) throw UsbError("start() before open()");
-  if (streaming_) throw UsbError("start() while already streaming");
-  stop_modules();
-  sleep_(std::chrono::milliseconds(10));
-  transport_.clear_halt(kDataEndpoint);
-  error_.clear();
-  transport_.start_bulk_in(
-      kDataEndpoint, kTransferSize, kTransferCount,
-      [this, sink = std::move(sink)](std::span<const std::uint8_t> bytes) {
-        batch_.clear();
-        decoder_.feed(bytes, batch_);
-        if (!batch_.empty() && sink) sink(batch_);
-      },
-      [this](StreamState, const std::string& why) { error_ = why; });
-  streaming_ = true;
-  config_write(transport_, module::usb, usbmod::run, 1);
-  config_write(transport_, module::mux, mux::timestamp_run, 1);
-  config_write(transport_, module::mux, mux::run, 1);
-  sleep_(std::chrono::milliseconds(50));
-  config_write(transport_, module::dvs, dvs::run, 1);
+void DvxplorerDevice::start_sensor() {
   sensor(dvx::timestamp_reset, 1);  // sensor timestamp reset pulse
   sensor(dvx::timestamp_reset, 0);
   sensor(dvx::control_mode, dvx::mode_stream);
 }
 
-void DvxplorerDevice::stop() noexcept {
-  if (!streaming_) return;
-  streaming_ = false;
-  if (transport_.state() != StreamState::disconnected) {
-    try {
-      sensor(dvx::control_mode, dvx::mode_off);
-      stop_modules();
-    } catch (const std::exception& e) {
-      if (error_.empty()) error_ = std::string("stopping the device: ") + e.what();
-    }
-  }
-  transport_.stop_bulk_in();
-}
+void DvxplorerDevice::stop_sensor() { sensor(dvx::control_mode, dvx::mode_off); }
 
 }  // namespace yelan::camera::usb

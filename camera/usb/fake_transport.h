@@ -18,31 +18,31 @@ struct ControlRecord {
 
 class FakeTransport final : public Transport {
  public:
-  // Value a config read (module, parameter) returns until written; unset registers read 0.
-  void set_config(std::uint16_t module, std::uint16_t param, std::uint32_t value);
-  std::uint32_t config(std::uint16_t module, std::uint16_t param) const;
-  // Queues one bulk buffer; poll() delivers them in order, one per call.
-  void queue_buffer(std::vector<std::uint8_t> bytes);
-  // After the queued buffers, report the device as unplugged (LIBUSB_TRANSFER_NO_DEVICE).
-  void unplug_after_queue() { unplug_ = true; }
-  // Makes every later control transfer fail as if the device were gone.
-  void fail_controls() { controls_fail_ = true; }
-
-  const std::vector<ControlRecord>& controls() const { return controls_; }
-  int clear_halt_calls() const { return clear_halts_; }
-  bool bulk_running() const { return running_; }
-  std::size_t pending_buffers() const { return queue_.size(); }
-
+  // Control transfers, all recorded, and the register table that config reads answer from.
   void control_out(std::uint8_t request, std::uint16_t value, std::uint16_t index,
                    std::span<const std::uint8_t> data) override;
   std::vector<std::uint8_t> control_in(std::uint8_t request, std::uint16_t value,
                                        std::uint16_t index, std::size_t length) override;
+  const std::vector<ControlRecord>& controls() const { return controls_; }
+  // Value a config read (module, parameter) returns until written; unset registers read 0.
+  void set_config(std::uint16_t module, std::uint16_t param, std::uint32_t value);
+  std::uint32_t config(std::uint16_t module, std::uint16_t param) const;
+  // Makes every later control transfer fail as if the device were gone.
+  void fail_controls() { controls_fail_ = true; }
+
+  // The data endpoint: queued buffers come back one per poll(), then optionally an unplug.
   void clear_halt(std::uint8_t endpoint) override;
+  int clear_halt_calls() const { return clear_halts_; }
   void start_bulk_in(std::uint8_t endpoint, std::size_t size, int count, DataCallback on_data,
                      ErrorCallback on_error) override;
+  bool bulk_running() const { return running_; }
   void stop_bulk_in() noexcept override;
   void poll(std::chrono::milliseconds timeout) override;
   StreamState state() const override { return state_; }
+  void queue_buffer(std::vector<std::uint8_t> bytes);
+  std::size_t pending_buffers() const { return queue_.size(); }
+  // After the queued buffers, report the device as unplugged (LIBUSB_TRANSFER_NO_DEVICE).
+  void unplug_after_queue() { unplug_ = true; }
 
  private:
   std::map<std::pair<std::uint16_t, std::uint16_t>, std::uint32_t> config_;

@@ -1,7 +1,7 @@
 // What the DAVIS and DVXplorer decoders share: 16-bit little-endian words split from the
-// USB bytes, the 15-bit timestamp words with their wraps and resets, the statistics, and
+// USB bytes, the 15-bit timestamp words and the wrap words (code 7), the statistics, and
 // the sensor size as addressed on the wire (before any axis swap). Each decoder adds its
-// own pixel words (CRTP: Derived::decode_word handles a word after timestamp_word()).
+// own codes (CRTP: Derived::decode_code gets every other word as code and data).
 #pragma once
 #include <cstdint>
 #include <span>
@@ -19,7 +19,7 @@ class WordDecoder {
   // Decodes `bytes`, appending events to `out`. Any byte sequence is accepted.
   void feed(std::span<const std::uint8_t> bytes, std::vector<Event>& out) {
     stats_.bytes += bytes.size();
-    splitter_.split(bytes, [&](std::uint16_t w) { static_cast<Derived*>(this)->decode_word(w, out); });
+    splitter_.split(bytes, [&](std::uint16_t w) { decode_word(w, out); });
   }
 
   const DecoderStats& stats() const { return stats_; }
@@ -32,21 +32,33 @@ class WordDecoder {
   WordDecoder(std::uint16_t width, std::uint16_t height, bool invert_xy)
       : width_(invert_xy ? height : width), height_(invert_xy ? width : height), invert_xy_(invert_xy) {}
 
-  // Counts the word; a timestamp word (bit 15: the low 15 bits of the microsecond clock) is
-  // handled here and returns true.
-  bool timestamp_word(std::uint16_t word) {
-    ++stats_.words;
-    if (!(word & 0x8000)) return false;
-    ++stats_.timestamp_words;
-    if (!clock_.on_timestamp(word & 0x7FFF)) ++stats_.non_monotonic;
-    return true;
-  }
-
   std::uint16_t width_, height_;  // as addressed on the wire
   bool invert_xy_;
   WordSplitter splitter_;
   TimestampClock clock_;
   DecoderStats stats_;
+
+ private:
+  static constexpr std::uint16_t kWrapCode = 7;
+
+  // Bit 15 set: the low 15 bits of the microsecond clock. Else bits 14:12 are a code and
+  // bits 11:0 its data; both models send the timestamp wrap as code 7.
+  void decode_word(std::uint16_t word, std::vector<Event>& out) {
+    ++stats_.words;
+    if (word & 0x8000) {
+      ++stats_.timestamp_words;
+      if (!clock_.on_timestamp(word & 0x7FFF)) ++stats_.non_monotonic;
+      return;
+    }
+    const std::uint16_t code = (word >> 12) & 0x7;
+    const std::uint16_t data = word & 0x0FFF;
+    if (code == kWrapCode) {
+      ++stats_.timestamp_wraps;
+      clock_.on_wrap(data);
+      return;
+    }
+    static_cast<Derived*>(this)->decode_code(code, data, out);
+  }
 };
 
 }  // namespace yelan::camera::usb
