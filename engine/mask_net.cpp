@@ -25,22 +25,6 @@ void crop_from(const Act& big, const Act& small, int top, int left) {
 
 }  // namespace
 
-void DoubleConv::params(const std::string& p, layers::ParamList& out) {
-  a_.params(p + "double_conv.0.", p + "double_conv.1.", out);
-  b_.params(p + "double_conv.3.", p + "double_conv.4.", out);
-}
-void DoubleConv::init(std::uint64_t seed) {
-  a_.init(seed * 2 + 1);
-  b_.init(seed * 2 + 2);
-}
-void DoubleConv::set_training(bool on) {
-  a_.set_training(on);
-  b_.set_training(on);
-}
-void DoubleConv::weights_changed() {
-  a_.weights_changed();
-  b_.weights_changed();
-}
 Act DoubleConv::forward(const Act& x) { return b_.forward(a_.forward(x)); }
 void DoubleConv::backward(const Act& x, const Act& dy, const Act& dx) {
   const Act da = da_.like(a_.out());
@@ -56,62 +40,18 @@ MaskNet::MaskNet(const ModelConfig& cfg)
       score1_({w_[0], 4 * w_[0], 1, 1, 0, true}),
       score2_({4 * w_[0], 8 * w_[0], 1, 1, 0, true}),
       fc_(8 * w_[0], cfg.n_masks) {
-  for (int k = 0; k < 4; ++k)
+  for (int k = 0; k < kLevels; ++k)
     if (w_[k + 1] != 2 * w_[k])
       throw ConfigError(cfg.name + ": U-Net widths must double level to level (mask.width_mult x 64 an integer)");
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < kLevels; ++k) {
     pool_.emplace_back(2, 2, 0);
     down_.push_back(std::make_unique<DoubleConv>(w_[k], w_[k + 1]));
   }
-  for (int k = 0; k < 4; ++k) {  // up1 works on the deepest level
-    const int cin = w_[4 - k];
+  for (int k = 0; k < kLevels; ++k) {  // up1 works on the deepest level
+    const int cin = w_[kLevels - k];
     up_.push_back(std::make_unique<layers::Conv2d>(layers::ConvSpec{cin, cin / 2, 2, 2, 0, true, true}));
-    up_conv_.push_back(std::make_unique<DoubleConv>(cin, w_[3 - k]));
+    up_conv_.push_back(std::make_unique<DoubleConv>(cin, w_[kLevels - 1 - k]));
   }
-}
-
-void MaskNet::params(layers::ParamList& out) {
-  inc_.params("inc.", out);
-  for (int k = 0; k < 4; ++k) down_[k]->params("down" + std::to_string(k + 1) + ".maxpool_conv.1.", out);
-  for (int k = 0; k < 4; ++k) {
-    up_[k]->params("up" + std::to_string(k + 1) + ".up.", out);
-    up_conv_[k]->params("up" + std::to_string(k + 1) + ".conv.", out);
-  }
-  outc_.params("outc.conv.", out);
-  score1_.params("score_conv.0.", out);
-  score2_.params("score_conv.1.", out);
-  fc_.params("fc.", out);
-}
-
-void MaskNet::init(std::uint64_t seed) {
-  inc_.init(seed * 100 + 1);
-  for (int k = 0; k < 4; ++k) {
-    down_[k]->init(seed * 100 + 10 + k);
-    up_[k]->init(seed * 100 + 20 + k);
-    up_conv_[k]->init(seed * 100 + 30 + k);
-  }
-  outc_.init(seed * 100 + 40);
-  score1_.init(seed * 100 + 41);
-  score2_.init(seed * 100 + 42);
-  fc_.init(seed * 100 + 43);
-}
-
-void MaskNet::set_training(bool on) {
-  inc_.set_training(on);
-  for (auto& d : down_) d->set_training(on);
-  for (auto& u : up_conv_) u->set_training(on);
-}
-
-void MaskNet::weights_changed() {
-  inc_.weights_changed();
-  for (int k = 0; k < 4; ++k) {
-    down_[k]->weights_changed();
-    up_[k]->weights_changed();
-    up_conv_[k]->weights_changed();
-  }
-  outc_.weights_changed();
-  score1_.weights_changed();
-  score2_.weights_changed();
 }
 
 void MaskNet::forward(const Act& x) {
@@ -120,14 +60,14 @@ void MaskNet::forward(const Act& x) {
                                 "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.channels) + "x" +
                                 std::to_string(cfg_.height()) + "x" + std::to_string(cfg_.width()));
   x_[0] = inc_.forward(x);
-  for (int k = 0; k < 4; ++k) {
+  for (int k = 0; k < kLevels; ++k) {
     pooled_[k] = pooled_buf_[k].like(pool_[k].out_shape(x_[k]));
     pool_[k].forward(x_[k], pooled_[k]);
     x_[k + 1] = down_[k]->forward(pooled_[k]);
   }
-  Act y = x_[4];
-  for (int k = 0; k < 4; ++k) {
-    const Act& skip = x_[3 - k];
+  Act y = x_[kLevels];
+  for (int k = 0; k < kLevels; ++k) {
+    const Act& skip = x_[kLevels - 1 - k];
     upt_[k] = upt_buf_[k].like(up_[k]->out_shape(y));
     up_[k]->forward(y, upt_[k]);
     const int dy = skip.h - upt_[k].h, dx = skip.w - upt_[k].w;
@@ -161,10 +101,10 @@ void MaskNet::forward(const Act& x) {
 }
 
 void MaskNet::backward(const Act& x, const Act& dmasks, const float* dscores) {
-  const Act& y = upo_[3];
-  const Act dy = g_[0].like(y);
-  zero(dy);
-  if (dmasks.data) outc_.backward(y, dmasks, &dy);
+  const Act& top = upo_[kLevels - 1];
+  const Act dtop = d_top_.like(top);
+  zero(dtop);
+  if (dmasks.data) outc_.backward(top, dmasks, &dtop);
   if (dscores) {
     const int F = 8 * w_[0];
     std::vector<float> dlogit(logits_.size()), feat(std::size_t(x.n) * F), dfeat(feat.size());
@@ -172,40 +112,41 @@ void MaskNet::backward(const Act& x, const Act& dmasks, const float* dscores) {
     for (int n = 0; n < x.n; ++n)
       for (int c = 0; c < F; ++c) feat[std::size_t(n) * F + c] = gap_.data[(std::size_t(n) * gap_.cb() + c / 16) * 16 + c % 16];
     fc_.backward(feat.data(), dlogit.data(), x.n, dfeat.data());
-    const Act dgap = g_[1].like(gap_);
+    const Act dgap = d_gap_.like(gap_);
     zero(dgap);
     for (int n = 0; n < x.n; ++n)
       for (int c = 0; c < F; ++c) dgap.data[(std::size_t(n) * gap_.cb() + c / 16) * 16 + c % 16] = dfeat[std::size_t(n) * F + c];
-    const Act ds2 = g_[2].like(s2_);
+    const Act ds2 = d_s2_.like(s2_);
     layers::global_avg_pool_backward(dgap, ds2);
-    const Act ds1 = g_[3].like(s1_);
+    const Act ds1 = d_s1_.like(s1_);
     score2_.backward(s1_, ds2, &ds1);
-    const Act dy2 = g_[4].like(y);
-    score1_.backward(y, ds1, &dy2);
-    layers::accumulate(dy2, dy);
+    const Act dtop_score = d_top_score_.like(top);
+    score1_.backward(top, ds1, &dtop_score);
+    layers::accumulate(dtop_score, dtop);
   }
   // Up path in reverse. Level k's input is x_4 (k = 0) or the previous up's output.
-  Act g = dy;
+  Act g = dtop;
   int ping = 0;
-  for (int k = 3; k >= 0; --k) {
-    const Act dcat = g_[5].like(cat_[k]);
+  for (int k = kLevels - 1; k >= 0; --k) {
+    const int level = kLevels - 1 - k;  // the skip's
+    const Act dcat = d_cat_.like(cat_[k]);
     up_conv_[k]->backward(cat_[k], g, dcat);
-    const Act dsk = skip_grad_[3 - k].like(x_[3 - k]), dpad = g_[6].like(padded_[k]);
+    const Act dsk = d_skip_[level].like(x_[level]), dpad = d_padded_.like(padded_[k]);
     layers::split_channels(dcat, dsk, dpad);
-    const Act dupt = g_[7].like(upt_[k]);
+    const Act dupt = d_upt_.like(upt_[k]);
     crop_from(dpad, dupt, pad_top_[k], pad_left_[k]);
-    const Act& input = k == 0 ? x_[4] : upo_[k - 1];
-    const Act din = ping_[ping ^= 1].like(input);
+    const Act& input = k == 0 ? x_[kLevels] : upo_[k - 1];
+    const Act din = d_level_[ping ^= 1].like(input);
     up_[k]->backward(input, dupt, &din);
     g = din;
   }
   // Down path: x_{k+1} = down_k(pool(x_k)); each level also gets its skip's gradient.
-  for (int k = 3; k >= 0; --k) {
-    const Act dpool = g_[3].like(pooled_[k]);
+  for (int k = kLevels - 1; k >= 0; --k) {
+    const Act dpool = d_pooled_.like(pooled_[k]);
     down_[k]->backward(pooled_[k], g, dpool);
-    const Act dxk = ping_[ping ^= 1].like(x_[k]);
+    const Act dxk = d_level_[ping ^= 1].like(x_[k]);
     pool_[k].backward(x_[k], dpool, dxk);
-    layers::accumulate(skip_grad_[k].like(x_[k]), dxk);
+    layers::accumulate(d_skip_[k].like(x_[k]), dxk);
     g = dxk;
   }
   inc_.backward(x, g, Act{});  // the TORE input needs no gradient

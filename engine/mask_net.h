@@ -9,17 +9,20 @@
 
 #include "engine/model_config.h"
 #include "layers/blocks.h"
+#include "layers/module.h"
 
 namespace yelan {
 
 // conv3x3-BN-ReLU twice.
-class DoubleConv {
+class DoubleConv : public layers::Module<DoubleConv> {
  public:
   DoubleConv(int in, int out) : a_({in, out, 3, 1, 1}, true), b_({out, out, 3, 1, 1}, true) {}
-  void params(const std::string& prefix, layers::ParamList& out);
-  void init(std::uint64_t seed);
-  void set_training(bool on);
-  void weights_changed();
+  static constexpr std::uint64_t kSeedStride = 2;
+  template <class F>
+  void for_each_part(F&& f) {
+    f(a_, {"double_conv.0.", 1, "double_conv.1."});
+    f(b_, {"double_conv.3.", 2, "double_conv.4."});
+  }
   layers::Act forward(const layers::Act& x);
   void backward(const layers::Act& x, const layers::Act& dy, const layers::Act& dx);
 
@@ -28,13 +31,25 @@ class DoubleConv {
   layers::ActBuf da_;
 };
 
-class MaskNet {
+class MaskNet : public layers::Module<MaskNet> {
  public:
   explicit MaskNet(const ModelConfig& cfg);
-  void params(layers::ParamList& out);
-  void init(std::uint64_t seed);
-  void set_training(bool on);
-  void weights_changed();
+  // The parts in state_dict order (layers/module.h derives params, init, set_training and
+  // weights_changed from this list).
+  static constexpr std::uint64_t kSeedStride = 100;
+  template <class F>
+  void for_each_part(F&& f) {
+    f(inc_, {"inc.", 1});
+    for (int k = 0; k < kLevels; ++k) f(*down_[k], {"down" + std::to_string(k + 1) + ".maxpool_conv.1.", 10u + k});
+    for (int k = 0; k < kLevels; ++k) {
+      f(*up_[k], {"up" + std::to_string(k + 1) + ".up.", 20u + k});
+      f(*up_conv_[k], {"up" + std::to_string(k + 1) + ".conv.", 30u + k});
+    }
+    f(outc_, {"outc.conv.", 40});
+    f(score1_, {"score_conv.0.", 41});
+    f(score2_, {"score_conv.1.", 42});
+    f(fc_, {"fc.", 43});
+  }
 
   // x: n frames, cfg.channels x H x W. Results valid until the next forward.
   void forward(const layers::Act& x);
@@ -44,8 +59,9 @@ class MaskNet {
   void backward(const layers::Act& x, const layers::Act& dmasks, const float* dscores);
 
  private:
+  static constexpr int kLevels = 4;  // the U-Net's depth: 4 downs, 4 ups (the architecture's, not a config's)
   ModelConfig cfg_;
-  int w_[5];
+  int w_[kLevels + 1];
   DoubleConv inc_;
   std::vector<std::unique_ptr<DoubleConv>> down_, up_conv_;
   std::vector<std::unique_ptr<layers::Conv2d>> up_;
@@ -54,14 +70,20 @@ class MaskNet {
   layers::Linear fc_;
 
   // the last forward
-  std::array<layers::Act, 5> x_;          // inc output, down1..down4 outputs
-  std::array<layers::Act, 4> pooled_, upt_, padded_, cat_, upo_;
-  std::array<int, 4> pad_top_{}, pad_left_{};
-  layers::ActBuf pooled_buf_[4], upt_buf_[4], padded_buf_[4], cat_buf_[4], masks_buf_, s1_buf_, s2_buf_, gap_buf_;
+  std::array<layers::Act, kLevels + 1> x_;  // inc output, down1..down4 outputs
+  std::array<layers::Act, kLevels> pooled_, upt_, padded_, cat_, upo_;
+  std::array<int, kLevels> pad_top_{}, pad_left_{};
+  layers::ActBuf pooled_buf_[kLevels], upt_buf_[kLevels], padded_buf_[kLevels], cat_buf_[kLevels];
+  layers::ActBuf masks_buf_, s1_buf_, s2_buf_, gap_buf_;
   layers::Act masks_, s1_, s2_, gap_;
   std::vector<float> logits_, scores_;
-  // gradient scratch
-  layers::ActBuf g_[8], skip_grad_[4], ping_[2];
+  // backward only, each dL/d the activation it is named after
+  layers::ActBuf d_top_;                      // the last up block's output (what outc and the score head read)
+  layers::ActBuf d_gap_, d_s2_, d_s1_, d_top_score_;  // the score head; d_top_score_ is its share of d_top_
+  layers::ActBuf d_cat_, d_padded_, d_upt_;  // one up level at a time
+  layers::ActBuf d_pooled_;                  // one down level at a time
+  layers::ActBuf d_skip_[kLevels];           // x_[k] as a skip, held until the down path reaches level k
+  layers::ActBuf d_level_[2];                // the main path, ping-pong: an up or down block's input and output
 };
 
 }  // namespace yelan

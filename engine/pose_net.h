@@ -11,16 +11,34 @@
 #include "layers/blocks.h"
 #include "layers/convlstm.h"
 #include "layers/hourglass.h"
+#include "layers/module.h"
 
 namespace yelan {
 
-class PoseNet {
+class PoseNet : public layers::Module<PoseNet> {
  public:
   explicit PoseNet(const ModelConfig& cfg);
-  void params(layers::ParamList& out);
-  void init(std::uint64_t seed);
-  void set_training(bool on);
-  void weights_changed();
+  // The parts in state_dict order (layers/module.h derives params, init, set_training and
+  // weights_changed from this list).
+  static constexpr std::uint64_t kSeedStride = 1000;
+  template <class F>
+  void for_each_part(F&& f) {
+    f(conv1_, {"in_cnn.0.", 1});
+    f(bn1_, {"in_cnn.1."});
+    for (std::size_t i = 0; i < resnet_.size(); ++i)  // torchvision's layer1 (3 blocks), then layer2's first 4
+      f(*resnet_[i], {i < 3 ? "in_cnn.4." + std::to_string(i) + "." : "in_cnn.5." + std::to_string(i - 3) + ".", 10 + i});
+    if (cfg_.convlstm) f(cl_, {"cl.", 20});
+    f(skip_, {"cl_skip_block.", 21});
+    static const char* const plane_names[3] = {"xy_hm_cnns.", "zy_hm_cnns.", "xz_hm_cnns."};
+    for (int p = 0; p < 3; ++p)
+      for (int t = 0; t < cfg_.stages; ++t) f(*stages_[t].planes[p], {plane_names[p] + std::to_string(t) + ".", 100u + 3 * t + p});
+    for (int t = 1; t < cfg_.stages; ++t)
+      f(*stages_[t].combiner, {"hm_combiners." + std::to_string(t - 1) + ".combine_block.", 200u + t - 1});
+  }
+  void weights_changed() {
+    have_zero_feat_ = false;
+    Module::weights_changed();
+  }
   // Causal configs only: each forward continues the ConvLSTM state of the previous one (a
   // live stream fed a frame at a time); reset_stream() starts a new window.
   void set_streaming(bool on) { cl_.set_streaming(on); }
@@ -43,7 +61,7 @@ class PoseNet {
   CropBox forward_cropped(const layers::Act& x, CropBox box, int frames_per_window);
   // Probability maps of stage t, plane p (0 xy, 1 zy, 2 xz), and normalised joints
   // (n x J x 3) of the last stage, valid until the next forward.
-  const layers::Act& heatmap(int stage, int plane) const { return probs_[stage][plane]; }
+  const layers::Act& heatmap(int stage, int plane) const { return stages_[stage].probs[plane]; }
   const std::vector<float>& joints() const { return joints_; }
   // The ResNet head's output (n x resnet_mid x mid_h x mid_w) of the last forward.
   const layers::Act& head_features() const { return feats_; }
@@ -67,22 +85,40 @@ class PoseNet {
   std::vector<std::unique_ptr<layers::BasicBlock>> resnet_;
   layers::WindowConvLSTM cl_;
   layers::ResidualBlock skip_;
-  std::vector<std::array<std::unique_ptr<layers::HourglassStage>, 3>> hourglass_;
-  std::vector<std::unique_ptr<layers::ResidualBlock>> combiners_;
+
+  // One hourglass stage: its parts, its activations of the last forward and its heatmaps'
+  // gradients in the backward. stages_ has cfg.stages of them.
+  struct Stage {
+    std::unique_ptr<layers::ResidualBlock> combiner;  // stages after the first: over the previous heatmaps
+    std::array<std::unique_ptr<layers::HourglassStage>, 3> planes;  // xy, zy, xz
+    layers::ActBuf hmcat_buf, inp_buf, prob_buf[3], dprob_buf[3];
+    layers::Act hmcat;  // cat[xy, zy, xz] of the previous stage's heatmaps: the combiner's input
+    layers::Act inp;    // the hourglasses' input: the skip block's output, plus the combiner's after the first
+    std::array<layers::Act, 3> logits, probs;
+  };
+  std::vector<Stage> stages_;
 
   // activations of the last forward
-  layers::ActBuf c1_buf_, b1_buf_, p_buf_, cat_buf_, hmcat_buf_[8], inp_buf_[8], prob_buf_[8][3];
+  layers::ActBuf c1_buf_, b1_buf_, p_buf_, cat_buf_;
   layers::Act c1_, b1_, pooled_, cat_;
   std::vector<layers::Act> res_in_;  // input of each BasicBlock, then the head's output
   layers::Act feats_, cl_out_;
-  std::vector<layers::Act> inp_, hmcat_;
-  std::vector<std::array<layers::Act, 3>> logits_, probs_;
   std::vector<float> joints_;
+  // Shared by forward and backward on purpose: cat[xy, zy] of a stage's heatmaps, in the
+  // forward the probabilities on their way into hmcat (concatenated two at a time), in the
+  // backward their gradient on its way out of it. Same shape, and live only within one stage.
+  layers::ActBuf heat_pair_;
   // forward_cropped: the head's features for an all-zero frame, the crop and the full map
   layers::ActBuf zero_feat_buf_, crop_buf_, full_feat_buf_;
   bool have_zero_feat_ = false, cropped_ = false;
-  // gradient scratch
-  layers::ActBuf g_inp_, g_prob_, g_logit_, g_hg_, g_cat_, g_extra_[8][3], g_feat_a_, g_feat_b_, g_cl_, g_c1_, g_b1_;
+  // backward only, each dL/d the activation it is named after
+  layers::ActBuf d_inp_;            // a stage's input (every stage adds to the next one's)
+  layers::ActBuf d_dsnt_[3];        // the last stage's probabilities through the joints (xy, zy, xz)
+  layers::ActBuf d_logits_, d_hg_in_;  // one plane at a time: its logits, its hourglass's input
+  layers::ActBuf d_hmcat_;          // a combiner's input
+  layers::ActBuf d_cat_;            // the skip block's input cat[feats, convlstm(feats)]
+  layers::ActBuf d_cl_out_, d_c1_, d_b1_;
+  layers::ActBuf d_feat_a_, d_feat_b_;  // the head's features, then ping-pong down its BasicBlocks
 };
 
 }  // namespace yelan

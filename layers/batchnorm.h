@@ -13,6 +13,7 @@ class BatchNorm2d {
 
   Param weight, bias, running_mean, running_var, num_batches_tracked;
   bool training = true;
+  void set_training(bool on) { training = on; }
   float eps = 1e-5f, momentum = 0.1f;
 
   void params(const std::string& prefix, ParamList& out);

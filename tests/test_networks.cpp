@@ -277,6 +277,28 @@ TEST_CASE("pose net without ConvLSTM: no cl weights, skip block on the head alon
   CHECK(checked >= 10);
 }
 
+TEST_CASE("pose net stages are sized from the config: 10 stages (past the old fixed 8) list, run and differentiate", "[networks][pose]") {
+  std::string text = load_model_config("tiny").json;
+  const std::string two = "\"stages\": 2";
+  text.replace(text.find(two), two.size(), "\"stages\": 10");
+  const ModelConfig cfg = parse_model_config(text, "tiny-10");
+  REQUIRE(cfg.stages == 10);
+  PoseNet net(cfg);
+  layers::ParamList params;
+  net.params(params);
+  std::map<std::string, int> seen;
+  for (auto& p : params) ++seen[p.key];
+  for (auto& [key, n] : seen) CHECK(n == 1);  // every part listed once
+  CHECK(seen.count("hm_combiners.8.combine_block.module.0.weight") == 1);
+  CHECK(seen.count("hm_combiners.9.combine_block.module.0.weight") == 0);
+  CHECK(seen.count("xz_hm_cnns.9.up_layers.4.module.0.weight") == 1);
+  const int checked = check_pose_gradients(net, cfg, 4, [](const std::string& key, int) {
+    return key == "in_cnn.0.weight" || key.rfind("hm_combiners.8.", 0) == 0 || key.rfind("zy_hm_cnns.9.down_layers.0.", 0) == 0;
+  });
+  CHECK(checked >= 6);
+  for (int t = 0; t < cfg.stages; ++t) CHECK(net.heatmap(t, 2).c == cfg.joints);
+}
+
 TEST_CASE("pose net forward_cropped: features beyond the head's receptive field of the crop edge are the whole frame's", "[networks][pose]") {
   // A wide frame (64 x 512) whose right half is zero, as a masked frame is outside the mask.
   const std::string text =
