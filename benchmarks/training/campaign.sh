@@ -4,7 +4,7 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|train|train-mask|train-pose|train-pose-small|save|restore|combine|all]
+#   benchmarks/training/campaign.sh [dataset|train|train-mask|train-mask-neg|train-pose|train-pose-small|save|restore|combine|all]
 #   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
@@ -47,10 +47,13 @@ case "$what" in
   # 0.125 net scored 243 mm on its own training recordings (above the per-view floor of
   # 173 mm on the same frames): it underfits, so the next step is width, not data.
   train-pose-small) CFG=weights_tools/configs/small.json train pose pose-small "${POSE_SMALL_STEPS:-8000}" --occlusion ;;
+  # Stage 1 again, from mask-p0125's best, with the panning and shaking empty scenes the
+  # dataset gained (the DAVIS recording has a moving camera and nobody in it).
+  train-mask-neg) train mask mask-neg "${MASK_NEG_STEPS:-3000}" --lr 5e-4 --init "$RUNS/mask-p0125/best.h5" ;;
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small mask-p0125; do
+    for run in pose-p0125 pose-small mask-p0125 mask-neg; do
       [ -d "$RUNS/$run" ] || continue
       mkdir -p "models/campaign/$run"
       cp "$RUNS/$run/run.json" "$RUNS/$run/log.csv" "models/campaign/$run/"
@@ -76,5 +79,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|train|train-mask|train-pose|train-pose-small|save|restore|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|train|train-mask|train-mask-neg|train-pose|train-pose-small|save|restore|combine|all]" >&2; exit 2 ;;
 esac
