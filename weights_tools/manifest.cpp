@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "weights_tools/json.h"
+#include "weights_tools/parse_json.h"
 
 namespace yelan::weights {
 namespace {
@@ -55,45 +55,51 @@ std::string config_dir() {
 }
 
 Manifest read_manifest(const std::string& path) {
+  using Json = nlohmann::ordered_json;
   Json doc;
   try {
-    doc = Json::parse(read_text(path));
+    doc = parse_json(read_text(path));
   } catch (const JsonError& e) {
     bad(path, std::string("not valid JSON: ") + e.what());
   }
-  const Json* format = doc.find("format");
-  if (!format || !format->is_string() || format->string() != "yelan-weights-manifest")
+  // The member `key` of an object; nullptr when absent or when `o` is not an object.
+  auto find = [](const Json& o, const char* key) -> const Json* {
+    const auto it = o.find(key);
+    return it == o.end() ? nullptr : &*it;
+  };
+  const Json* format = find(doc, "format");
+  if (!format || *format != "yelan-weights-manifest")
     bad(path, "not a weights manifest (format is not 'yelan-weights-manifest')");
-  const Json* version = doc.find("version");
-  if (!version || !version->is_number() || version->number() != 1) bad(path, "manifest version is not 1");
-  const Json* config = doc.find("config");
+  const Json* version = find(doc, "version");
+  if (!version || !version->is_number() || *version != 1) bad(path, "manifest version is not 1");
+  const Json* config = find(doc, "config");
   if (!config || !config->is_object()) bad(path, "manifest has no config object");
   Manifest m;
   m.path = path;
   m.config_json = config->dump();
-  if (const Json* name = config->find("name"); name && name->is_string()) m.config_name = name->string();
-  const Json* groups = doc.find("groups");
+  if (const Json* name = find(*config, "name"); name && name->is_string()) m.config_name = name->get<std::string>();
+  const Json* groups = find(doc, "groups");
   if (!groups || !groups->is_object()) bad(path, "manifest has no groups object");
   for (const std::string& g : group_names()) {
-    const Json* list = groups->find(g);
+    const Json* list = find(*groups, g.c_str());
     if (!list || !list->is_array()) bad(path, "manifest has no list for group '" + g + "'");
     auto& out = m.groups[g];
-    for (std::size_t i = 0; i < list->items().size(); ++i) {
-      const Json& t = list->items()[i];
+    for (std::size_t i = 0; i < list->size(); ++i) {
+      const Json& t = (*list)[i];
       const std::string where = "groups." + g + "[" + std::to_string(i) + "]";
-      const Json* name = t.find("name");
-      const Json* shape = t.find("shape");
+      const Json* name = find(t, "name");
+      const Json* shape = find(t, "shape");
       if (!name || !name->is_string() || !shape || !shape->is_array())
         bad(path, where + " needs a string 'name' and an array 'shape'");
+      const std::string n = name->get<std::string>();
       Shape s;
-      for (const Json& d : shape->items()) {
-        if (!d.is_number() || d.number() < 0 || d.number() > double(kMaxElements) ||
-            d.number() != std::floor(d.number()))
-          bad(path, where + " (" + name->string() + "): shape holds a non-integer or absurd size");
-        s.push_back(static_cast<std::int64_t>(d.number()));
+      for (const Json& d : *shape) {
+        const double v = d.is_number() ? d.get<double>() : -1;
+        if (v < 0 || v > double(kMaxElements) || v != std::floor(v))
+          bad(path, where + " (" + n + "): shape holds a non-integer or absurd size");
+        s.push_back(static_cast<std::int64_t>(v));
       }
-      if (!out.emplace(name->string(), std::move(s)).second)
-        bad(path, where + ": '" + name->string() + "' listed twice");
+      if (!out.emplace(n, std::move(s)).second) bad(path, where + ": '" + n + "' listed twice");
     }
   }
   return m;

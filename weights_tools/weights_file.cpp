@@ -13,7 +13,7 @@
 
 #include "camera/io/h5.h"
 #include "camera/io/temp_file.h"
-#include "weights_tools/json.h"
+#include "weights_tools/parse_json.h"
 
 namespace yelan::weights {
 namespace {
@@ -187,7 +187,7 @@ WeightsReader::WeightsReader(const std::string& path) : file_(std::make_unique<F
   auto config = string_attr(root, "config", path);
   if (!config) bad(path, "root attribute 'config' is missing");
   try {
-    if (!Json::parse(*config).is_object()) bad(path, "root attribute 'config' is not a JSON object");
+    if (!parse_json(*config).is_object()) bad(path, "root attribute 'config' is not a JSON object");
   } catch (const JsonError& e) {
     bad(path, std::string("root attribute 'config' is not valid JSON: ") + e.what());
   }

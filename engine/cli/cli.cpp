@@ -8,7 +8,7 @@
 #include "engine/threads.h"
 #include "engine/model_config.h"
 #include "kernels/cpu.h"
-#include "weights_tools/json.h"
+#include "weights_tools/parse_json.h"
 #include "weights_tools/weights_file.h"
 
 namespace yelan::cli {

@@ -17,16 +17,15 @@
 #include "engine/run/early_exit.h"
 #include "engine/run/presence.h"
 #include "camera/sim/recording_windows.h"
-#include "weights_tools/json.h"
 #include "engine/model_config.h"
 #include "weights_tools/manifest.h"
 #include "weights_tools/network_io.h"
+#include "weights_tools/parse_json.h"
 #include "weights_tools/weights_file.h"
 
 namespace yelan::cli {
 namespace {
 
-using weights::Shape;
 using weights::TensorInfo;
 using weights::WeightsReader;
 
@@ -54,38 +53,26 @@ GroupCounts counts(const std::vector<TensorInfo>& list) {
   return c;
 }
 
-std::string json_shape(const Shape& s) {
-  std::string out = "[";
-  for (std::size_t i = 0; i < s.size(); ++i) out.append(i ? "," : "").append(std::to_string(s[i]));
-  return out + "]";
-}
-
 int inspect(const Args& args, std::ostream& out) {
   args.expect_positionals(1, 1);
   WeightsReader r(args.positionals()[0]);
-  const std::string config = weights::Json::parse(r.config_json()).dump();
+  const nlohmann::ordered_json config = weights::parse_json(r.config_json());
   if (args.flag("--json")) {
-    out << "{\"file\":" << weights::json_quote(r.path()) << ",\"format\":" << weights::json_quote(weights::kFormat)
-        << ",\"version\":" << r.version() << ",\"config\":" << config << ",\"groups\":{";
-    bool first_group = true;
+    nlohmann::ordered_json doc = {{"file", r.path()}, {"format", weights::kFormat}, {"version", r.version()},
+                                  {"config", config}, {"groups", nlohmann::ordered_json::object()}};
     for (const std::string& g : weights::group_names()) {
       const GroupCounts c = counts(r.tensors(g));
-      out << (first_group ? "" : ",") << weights::json_quote(g) << ":{\"tensors\":" << c.tensors
-          << ",\"parameters\":" << c.parameters << ",\"values\":" << c.values << ",\"shapes\":{";
-      first_group = false;
-      bool first = true;
-      for (const TensorInfo& t : r.tensors(g)) {
-        out << (first ? "" : ",") << weights::json_quote(t.name) << ":" << json_shape(t.shape);
-        first = false;
-      }
-      out << "}}";
+      nlohmann::ordered_json shapes = nlohmann::ordered_json::object();
+      for (const TensorInfo& t : r.tensors(g)) shapes[t.name] = t.shape;
+      doc["groups"][g] = {{"tensors", c.tensors}, {"parameters", c.parameters}, {"values", c.values}, {"shapes", shapes}};
     }
-    out << "}}\n";
+    // Names and paths are bytes: what is not UTF-8 is shown as U+FFFD, never refused.
+    out << doc.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << "\n";
     return kOk;
   }
   out << "file:    " << r.path() << "\n"
       << "format:  " << weights::kFormat << ", version " << r.version() << "\n"
-      << "config:  " << config << "\n";
+      << "config:  " << config.dump() << "\n";
   for (const std::string& g : weights::group_names()) {
     const GroupCounts c = counts(r.tensors(g));
     out << g << ":    " << c.tensors << " tensors, " << c.parameters << " parameters, " << c.values
@@ -160,9 +147,7 @@ int diff(const Args& args, std::ostream& out) {
       if (all || d > tol) out << full << " max |a-b| " << number(d) << "\n";
     }
   }
-  const bool same_config =
-      weights::Json::parse(a.config_json()).dump() == weights::Json::parse(b.config_json()).dump();
-  if (!same_config) out << "config differs\n";
+  if (weights::parse_json(a.config_json()) != weights::parse_json(b.config_json())) out << "config differs\n";
   out << "summary: " << compared << " tensors compared, " << differing << " differ by more than " << number(tol)
       << ", max |a-b| " << number(worst) << (worst_name.empty() ? "" : " (" + worst_name + ")") << "; " << only_a
       << " only in A, " << only_b << " only in B, " << shapes << " shapes differ\n";
@@ -170,19 +155,18 @@ int diff(const Args& args, std::ostream& out) {
 }
 
 // Dotted paths of the leaves where two JSON objects differ ("input.window").
-void json_differences(const weights::Json& a, const weights::Json& b, const std::string& at,
+void json_differences(const nlohmann::ordered_json& a, const nlohmann::ordered_json& b, const std::string& at,
                       std::vector<std::string>& out) {
   if (a.is_object() && b.is_object()) {
     std::set<std::string> keys;
-    for (const auto& [k, v] : a.members()) keys.insert(k);
-    for (const auto& [k, v] : b.members()) keys.insert(k);
+    for (const auto& m : a.items()) keys.insert(m.key());
+    for (const auto& m : b.items()) keys.insert(m.key());
     for (const std::string& k : keys) {
-      const weights::Json *va = a.find(k), *vb = b.find(k);
       const std::string path = at.empty() ? k : at + "." + k;
-      if (!va || !vb) out.push_back(path);
-      else json_differences(*va, *vb, path, out);
+      if (!a.contains(k) || !b.contains(k)) out.push_back(path);
+      else json_differences(a.at(k), b.at(k), path, out);
     }
-  } else if (a.dump() != b.dump()) {
+  } else if (a != b) {
     out.push_back(at);
   }
 }
@@ -195,7 +179,7 @@ int verify(const Args& args, std::ostream& out, std::ostream& err) {
   WeightsReader r(args.positionals()[0]);
   weights::verify(r, m);
   std::vector<std::string> differ;
-  json_differences(weights::Json::parse(r.config_json()), weights::Json::parse(m.config_json), "", differ);
+  json_differences(weights::parse_json(r.config_json()), weights::parse_json(m.config_json), "", differ);
   std::string fields;
   for (const std::string& d : differ)
     if (d != "description") fields.append(fields.empty() ? "" : ", ").append(d);
@@ -220,9 +204,9 @@ int combine(const Args& a, std::ostream& out) {
   const auto m = a.value("--mask"), p = a.value("--pose"), o = a.value("-o");
   if (!m || !p || !o) throw UsageError("weights combine needs --mask A.h5 --pose B.h5 -o OUT.h5");
   const weights::Weights wm = weights::load_weights(*m), wp = weights::load_weights(*p);
-  const auto cm = weights::Json::parse(wm.config_json), cp = weights::Json::parse(wp.config_json);
+  const auto cm = weights::parse_json(wm.config_json), cp = weights::parse_json(wp.config_json);
   for (const char* key : {"input", "mask"})
-    if (!cm.find(key) || !cp.find(key) || cm.find(key)->dump() != cp.find(key)->dump())
+    if (!cm.contains(key) || !cp.contains(key) || cm.at(key) != cp.at(key))
       throw UsageError("weights combine: " + *m + " and " + *p + " differ in the config's '" + key +
                        "' section, so the mask net does not fit the pose net's input");
   weights::Weights w = wp;
@@ -230,9 +214,9 @@ int combine(const Args& a, std::ostream& out) {
   if (const auto c = a.value("--config")) {
     // A config for inference settings (pose.crop_margin): it must describe the same networks.
     const ModelConfig nc = load_model_config(*c);
-    const auto cn = weights::Json::parse(nc.json);
+    const auto cn = weights::parse_json(nc.json);
     for (const char* key : {"input", "mask"})
-      if (!cn.find(key) || cn.find(key)->dump() != cm.find(key)->dump())
+      if (!cn.contains(key) || cn.at(key) != cm.at(key))
         throw UsageError("weights combine: --config " + *c + " differs from " + *m + " in the '" + key + "' section");
     w.config_json = nc.json;
     try {

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "weights_test_util.h"
-#include "weights_tools/json.h"
+#include "weights_tools/parse_json.h"
 #include "weights_tools/manifest.h"
 
 using namespace yelan;
@@ -25,15 +25,15 @@ TEST_CASE("yelan weights inspect: counts per group and every name and shape", "[
 
   const auto j = yelan_cli({"weights", "inspect", "--json", dir / "w.h5"});
   REQUIRE(j.code == 0);
-  const weights::Json doc = weights::Json::parse(j.out);
-  CHECK(doc.find("version")->number() == 1);
-  CHECK(doc.find("config")->find("name")->string() == "sample");
-  const weights::Json& pose = *doc.find("groups")->find("pose");
-  CHECK(pose.find("tensors")->number() == 3);
-  CHECK(pose.find("parameters")->number() == 30);
-  CHECK(pose.find("values")->number() == 34);
-  CHECK(pose.find("shapes")->find("in_cnn.0.weight")->dump() == "[3,2,1,5]");
-  CHECK(pose.find("shapes")->find("in_cnn.1.num_batches_tracked")->dump() == "[]");
+  const nlohmann::ordered_json doc = weights::parse_json(j.out);
+  CHECK(doc.at("version") == 1);
+  CHECK(doc.at("config").at("name") == "sample");
+  const nlohmann::ordered_json& pose = doc.at("groups").at("pose");
+  CHECK(pose.at("tensors") == 3);
+  CHECK(pose.at("parameters") == 30);
+  CHECK(pose.at("values") == 34);
+  CHECK(pose.at("shapes").at("in_cnn.0.weight").dump() == "[3,2,1,5]");
+  CHECK(pose.at("shapes").at("in_cnn.1.num_batches_tracked").dump() == "[]");
 }
 
 TEST_CASE("yelan weights diff: max |a-b| per tensor, missing and reshaped tensors, exit 1", "[weights][cli]") {
