@@ -16,11 +16,15 @@
 namespace yelan::test {
 
 // The real binary started as a child process (its output to /dev/null, its stderr to
-// `stderr_path` if given), for tests that send it signals; returns the child's pid.
+// `stderr_path` if given), for tests that send it signals; returns the child's pid. With a
+// `gate` (a pipe's read end), the child waits for a byte on it before it starts the binary,
+// so that the test can first prepare files named after its pid.
 inline pid_t spawn(const std::string& binary, const std::vector<std::string>& args,
-                   const std::string& stderr_path = "/dev/null") {
+                   const std::string& stderr_path = "/dev/null", int gate = -1) {
   const pid_t child = ::fork();
   if (child != 0) return child;
+  char byte;
+  if (gate >= 0 && ::read(gate, &byte, 1) != 1) ::_exit(125);
   std::vector<char*> argv = {const_cast<char*>(binary.c_str())};
   for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
@@ -29,11 +33,9 @@ inline pid_t spawn(const std::string& binary, const std::vector<std::string>& ar
   ::_exit(127);
 }
 
-// The real binary run to its end, as a shell would: its exit code, 128 + the signal that
-// killed it, or -1 when it ran longer than `seconds` (it is killed then).
-inline int run_binary(const std::string& binary, const std::vector<std::string>& args, int seconds,
-                      const std::string& stderr_path = "/dev/null") {
-  const pid_t child = spawn(binary, args, stderr_path);
+// A child (or the real binary) run to its end, as a shell would: its exit code, 128 + the
+// signal that killed it, or -1 when it ran longer than `seconds` (it is killed then).
+inline int wait_child(pid_t child, int seconds) {
   if (child < 0) return -2;
   int status = 0;
   for (int waited_ms = 0; ::waitpid(child, &status, WNOHANG) != child; waited_ms += 10) {
@@ -45,6 +47,11 @@ inline int run_binary(const std::string& binary, const std::vector<std::string>&
     ::usleep(10000);
   }
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+inline int run_binary(const std::string& binary, const std::vector<std::string>& args, int seconds,
+                      const std::string& stderr_path = "/dev/null") {
+  return wait_child(spawn(binary, args, stderr_path), seconds);
 }
 
 struct CliResult {

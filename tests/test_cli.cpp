@@ -189,7 +189,7 @@ TEST_CASE("run refuses outputs it cannot write or that are its input, before any
   const std::string before = yelan::test::slurp(in);
   const Result same = cli({"run", "--weights", M, in, "--out", in});
   CHECK(same.code == 2);
-  CHECK(has(same.err, "is an input of this run"));
+  CHECK(has(same.err, "--out " + in + " is an input"));
   CHECK(yelan::test::slurp(in) == before);  // the input untouched
   for (const char* flag : {"--out", "--stats-json"}) {
     INFO(flag);
@@ -211,37 +211,39 @@ TEST_CASE("run refuses outputs it cannot write or that are its input, before any
 TEST_CASE("Ctrl-C or SIGTERM during sim, convert or repr leaves no temporary file", "[cli]") {
   yelan::test::CliTempDir d("signals");
   const std::string D = std::string(YELAN_SOURCE_DIR) + "/data/demo/lena-93_03-front-high-static.yelan.h5";
-  const std::vector<std::vector<std::string>> commands = {
-      {"sim", "--preset", "front-high-dynamic", "--duration", "60s", "-o", d / "s.yelan.h5", "--quiet"},
-      {"convert", D, d / "c.txt"},
-      {"repr", "--type", "tore", "--fps", "2000", D, d / "r.h5"},
+  const std::vector<std::pair<std::vector<std::string>, std::string>> commands = {
+      {{"sim", "--preset", "front-high-dynamic", "--duration", "60s", "-o", d / "s.yelan.h5", "--quiet"}, "s.yelan.h5"},
+      {{"convert", D, d / "c.txt"}, "c.txt"},
+      {{"repr", "--type", "tore", "--fps", "2000", D, d / "r.h5"}, "r.h5"},
   };
-  for (const auto& cmd : commands)
+  auto temps = [&](const std::string& out) {
+    int n = 0;
+    for (const auto& e : std::filesystem::directory_iterator(d.p)) n += e.path().filename().string().rfind(out + ".tmp-", 0) == 0;
+    return n;
+  };
+  for (const auto& [cmd, out] : commands)
     for (const int sig : {SIGINT, SIGTERM}) {
       INFO(cmd[0] << " signal " << sig);
       const pid_t child = yelan::test::spawn(YELAN_BINARY, cmd);
       REQUIRE(child > 0);
-      // Wait until the temporary file exists (or the command finished: too fast to interrupt).
-      auto temps = [&] {
-        int n = 0;
-        for (const auto& e : std::filesystem::directory_iterator(d.p)) n += e.path().string().find(".tmp-") != std::string::npos;
-        return n;
-      };
+      // The signal goes only once the command is writing (its temporary file exists): one
+      // that finished first, or never began writing, fails the test instead of passing it.
       int status = 0;
-      bool done = false;
-      for (int i = 0; i < 2000 && temps() == 0; ++i) {
-        if (::waitpid(child, &status, WNOHANG) == child) {
-          done = true;
-          break;
-        }
-        ::usleep(5000);
+      bool exited = false, writing = false;
+      for (int i = 0; i < 120000 && !exited && !writing; ++i) {  // up to 2 min: sanitizer builds are slow
+        writing = temps(out) > 0;
+        exited = !writing && ::waitpid(child, &status, WNOHANG) == child;
+        if (!writing && !exited) ::usleep(1000);
       }
-      if (!done) {
-        ::kill(child, sig);
+      if (!exited) {
+        ::kill(child, writing ? sig : SIGKILL);
         REQUIRE(::waitpid(child, &status, 0) == child);
-        CHECK(WIFSIGNALED(status));
       }
-      CHECK(temps() == 0);
+      REQUIRE(writing);
+      // The default action after the cleanup: the command dies by the signal, as if unhandled.
+      CHECK((WIFSIGNALED(status) && WTERMSIG(status) == sig));
+      CHECK_FALSE(std::filesystem::exists(d / out));  // interrupted before it completed
+      CHECK(temps(out) == 0);
       for (const auto& e : std::filesystem::directory_iterator(d.p)) std::filesystem::remove_all(e.path());
     }
 }

@@ -46,6 +46,8 @@ def main(argv=None):
     lp, stages = hpe_loss(heatmaps, target.to(dt), valid.to(dt))
     lp.backward()
 
+    # Written like make_parity_case.py's file on purpose (one dataset per tensor, no
+    # timestamps, so a case file is byte-reproducible); the two carry different tensors.
     with atomic_path(a.output) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = "yelan-grad-case"

@@ -67,6 +67,13 @@ case "$what" in
   save)
     for run in pose-p0125 pose-small mask-p0125 mask-neg mask-s2; do
       [ -d "$RUNS/$run" ] || continue
+      # A run stopped before its first checkpoint (or whose checkpoint was lost) keeps its log.
+      if [ ! -f "$RUNS/$run/checkpoint.h5" ]; then
+        echo "$run: no checkpoint in $RUNS/$run; only its log is saved" >&2
+        mkdir -p "models/campaign/$run"
+        cp "$RUNS/$run/run.json" "$RUNS/$run/log.csv" "models/campaign/$run/" 2>/dev/null || true
+        continue
+      fi
       mkdir -p "models/campaign/$run"
       cp "$RUNS/$run/run.json" "$RUNS/$run/log.csv" "models/campaign/$run/"
       [ -f "$RUNS/$run.out" ] && cp "$RUNS/$run.out" "models/campaign/$run/train.out"

@@ -12,6 +12,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/output_path.h"
 #include "engine/run/stream_eval.h"
 #include "engine/threads.h"
 #include "engine/train/evaluate.h"
@@ -57,6 +58,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
   if (simv && data) throw UsageError("give --sim or --data, not both");
+  if (const auto j = a.value("--json")) check_output("--json", *j, {*wpath});
   train::EvalSpec spec;
   spec.weights = *wpath;
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));

@@ -13,6 +13,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/output_path.h"
 
 namespace yelan::cli {
 namespace {
@@ -165,6 +166,7 @@ int cmd_convert(const std::vector<std::string>& argv, std::ostream& out, std::os
   const std::string& dst = args.positionals()[1];
   if (camera::writer_format_for(dst).empty())
     throw UsageError("cannot tell the output format of '" + dst + "' (use .yelan.h5, .h5, .aedat4 or .txt)");
+  check_output("OUT", dst, {in});
   try {
     auto reader = open_input(in, args);
     auto writer = camera::open_event_writer(dst, reader->info());

@@ -15,6 +15,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/output_path.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
 #include "layers/conv2d.h"
@@ -188,6 +189,7 @@ int forward(const Args& a, std::ostream& out) {
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), in = a.value("--input"), outp = a.value("--output");
   if (!wpath || !in || !outp) throw UsageError("model forward needs --weights W --input IN.h5 --output OUT.h5");
+  check_output("--output", *outp, {*wpath, *in});
   weights::LoadedNetworks nets(weights::load_weights(*wpath), *wpath);
   const ModelConfig& cfg = nets.cfg;
   MaskNet& mask = nets.mask;
@@ -271,6 +273,7 @@ int weights_init(const std::vector<std::string>& argv, std::ostream& out) {
   a.expect_positionals(0, 0);
   const auto name = a.value("--config"), o = a.value("-o");
   if (!name || !o) throw UsageError("weights init needs --config NAME|FILE --seed N -o W.h5");
+  check_output("-o", *o, {*name});
   const int seed = a.int_value_or("--seed", 0, 0, 2147483647);
   ModelConfig cfg;
   try {

@@ -20,6 +20,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/output_path.h"
 #include "engine/threads.h"
 
 namespace yelan::cli {
@@ -202,6 +203,7 @@ int run_repr(const std::vector<std::string>& argv, std::ostream& out) {
   if (type != "count" && args.value("--events")) throw UsageError("--events applies to --type count only");
   if (type != "voxel" && args.value("--bins")) throw UsageError("--bins applies to --type voxel only");
   if (type.rfind("tore", 0) != 0 && args.value("--k")) throw UsageError("--k applies to --type tore only");
+  check_output("OUT", out_path, {in});
 
   auto reader = camera::open_event_file(in);
   int width = reader->info().width, height = reader->info().height;

@@ -13,6 +13,7 @@
 #include "engine/cli/camera_open.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/output_path.h"
 #include "engine/cli/run_live.h"
 #include "engine/cli/run_output.h"
 #include "engine/run/viz.h"

@@ -21,6 +21,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/output_path.h"
 #include "engine/train/evaluate.h"
 
 namespace yelan::cli {
@@ -217,6 +218,7 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
   if (const auto d = a.value("--dataset")) return run_dataset(*d, a, out, err);
   const auto preset = a.value("--preset"), config = a.value("--config");
   if (bool(preset) == bool(config)) throw UsageError("sim needs exactly one of --preset NAME and --config scene.json");
+  if (const auto o = a.value("-o")) check_output("-o", *o, {config.value_or("")});
   sim::SimSpec spec;
   if (preset) {
     spec = sim::preset_spec(*preset);

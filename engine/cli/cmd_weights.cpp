@@ -13,7 +13,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
-#include "engine/cli/run_output.h"
+#include "engine/cli/output_path.h"
 #include "engine/run/early_exit.h"
 #include "engine/run/presence.h"
 #include "camera/sim/recording_windows.h"
@@ -203,6 +203,7 @@ int combine(const Args& a, std::ostream& out) {
   a.expect_positionals(0, 0);
   const auto m = a.value("--mask"), p = a.value("--pose"), o = a.value("-o");
   if (!m || !p || !o) throw UsageError("weights combine needs --mask A.h5 --pose B.h5 -o OUT.h5");
+  check_output("-o", *o, {*m, *p, a.value_or("--config", "")});
   const weights::Weights wm = weights::load_weights(*m), wp = weights::load_weights(*p);
   const auto cm = weights::parse_json(wm.config_json), cp = weights::parse_json(wp.config_json);
   for (const char* key : {"input", "mask"})

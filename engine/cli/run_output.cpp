@@ -1,11 +1,5 @@
 #include "engine/cli/run_output.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
-
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
@@ -26,27 +20,6 @@ std::string extension(const std::string& path) { return std::filesystem::path(pa
 void check_pose_output(const std::string& path) {
   const std::string ext = extension(path);
   if (ext != ".csv" && ext != ".json" && ext != ".h5") throw UsageError("--out " + path + ": expected .csv, .json or .h5");
-}
-
-void check_output(const std::string& flag, const std::string& path, const std::vector<std::string>& inputs) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (path.empty()) throw UsageError(flag + ": empty path");
-  if (fs::is_directory(path, ec)) throw UsageError(flag + " " + path + ": is a directory");
-  const fs::path parent = fs::absolute(path, ec).parent_path();
-  if (!fs::is_directory(parent, ec)) throw UsageError(flag + " " + path + ": no directory " + parent.string());
-  // Root passes access(2) everywhere; creating (and removing) a probe file is the real test.
-  std::string probe_name = ".";  // appended, not "." + ...: GCC 12 warns falsely on that (-Wrestrict)
-  probe_name += fs::path(path).filename().string();
-  probe_name += ".probe-" + std::to_string(::getpid());
-  const std::string probe = (parent / probe_name).string();
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW, 0600);
-  if (fd < 0) throw UsageError(flag + " " + path + ": cannot write in " + parent.string() + " (" + std::strerror(errno) + ")");
-  ::close(fd);
-  ::unlink(probe.c_str());
-  for (const auto& in : inputs)
-    if (fs::exists(in, ec) && fs::exists(path, ec) && fs::equivalent(in, path, ec))
-      throw UsageError(flag + " " + path + " is an input of this run: refusing to overwrite it");
 }
 
 void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {

@@ -27,9 +27,6 @@ struct RunSetup {
 
 // Throws UsageError unless `path` ends in .csv, .json or .h5.
 void check_pose_output(const std::string& path);
-// An output path that can be written (its folder exists and is writable, it is no folder)
-// and is none of the run's inputs; checked before any work. UsageError otherwise.
-void check_output(const std::string& flag, const std::string& path, const std::vector<std::string>& inputs);
 
 // Writes poses atomically (a temporary file renamed into place) as CSV, JSON or HDF5.
 void write_poses(const std::string& path, const std::vector<run::Pose>& poses);
