@@ -1,5 +1,10 @@
 #include "engine/cli/run_output.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
@@ -90,17 +95,30 @@ RunSession::RunSession(const RunSetup& setup, int sensor_width, int sensor_heigh
   if (setup_.viz_dir)
     viz_.emplace(*setup_.viz_dir, sensor_width, sensor_height, setup_.viz_every, setup_.options.rate_hz);
   if (live_ && setup_.out && extension(*setup_.out) == ".csv") {
-    live_csv_.open(*setup_.out, std::ios::trunc);
-    live_csv_ << run::pose_csv_header() << "\n" << std::flush;
-    if (!live_csv_) throw std::runtime_error("cannot write " + *setup_.out);
+    // Grown in place so that it can be followed while the camera runs, so no temp file and
+    // rename: O_NOFOLLOW keeps a link planted at OUT from being written through.
+    const int fd = ::open(setup_.out->c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0 && errno == ELOOP)
+      throw UsageError("--out " + *setup_.out + " is a symbolic link: refusing to write through it");
+    if (fd < 0) throw std::runtime_error("cannot write " + *setup_.out + ": " + std::strerror(errno));
+    live_csv_.reset(::fdopen(fd, "w"));
+    if (!live_csv_) {
+      ::close(fd);
+      throw std::runtime_error("cannot write " + *setup_.out);
+    }
+    write_live_csv(run::pose_csv_header() + "\n");
   }
+}
+
+void RunSession::write_live_csv(const std::string& text) {
+  if (std::fputs(text.c_str(), live_csv_.get()) < 0 || std::fflush(live_csv_.get()) != 0)
+    throw std::runtime_error("cannot write " + *setup_.out + " (disk full?)");
 }
 
 void RunSession::add(const run::Pose& p) {
   ++poses_written_;
-  if (live_csv_.is_open()) {
-    live_csv_ << run::pose_csv_row(p) << "\n" << std::flush;
-    if (!live_csv_) throw std::runtime_error("cannot write " + *setup_.out + " (disk full?)");
+  if (live_csv_) {
+    write_live_csv(run::pose_csv_row(p) + "\n");
   } else if (setup_.out) {
     kept_.push_back(p);
   }
@@ -131,9 +149,8 @@ double RunSession::saved_share() const {
 void RunSession::write_outputs(double wall_s, std::ostream& err) {
   if (outputs_written_) return;
   outputs_written_ = true;
-  if (live_csv_.is_open()) {
-    live_csv_.close();
-    if (!live_csv_) throw std::runtime_error("cannot write " + *setup_.out);
+  if (live_csv_) {
+    if (std::fclose(live_csv_.release()) != 0) throw std::runtime_error("cannot write " + *setup_.out);
   } else if (setup_.out) {
     write_poses(*setup_.out, kept_);
   }

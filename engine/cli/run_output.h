@@ -2,6 +2,7 @@
 // (CSV, JSON or HDF5, and --viz pictures) and the summary printed at the end.
 #pragma once
 #include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -55,12 +56,16 @@ class RunSession {
 
  private:
   void add(const run::Pose& p);
+  void write_live_csv(const std::string& text);
 
   RunSetup setup_;
   bool live_;
   run::PosePipeline pipe_;
   std::optional<run::RunViz> viz_;
-  std::ofstream live_csv_;
+  struct FileCloser {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+  };
+  std::unique_ptr<std::FILE, FileCloser> live_csv_;  // a live run's CSV, grown in place
   std::vector<run::Pose> kept_;
   std::uint64_t poses_written_ = 0;
   bool outputs_written_ = false;

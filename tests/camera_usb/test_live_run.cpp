@@ -3,9 +3,12 @@
 // poses must equal those of the same events pushed straight into a PosePipeline.
 #include <catch2/catch.hpp>
 
+#include <unistd.h>
+
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <random>
 #include <sstream>
 
@@ -195,6 +198,24 @@ TEST_CASE("live run: SIGINT or SIGTERM stops it with exit 0, and the CSV holds e
     REQUIRE(rows_when_interrupted.size() <= rows.size());
     CHECK(std::equal(rows_when_interrupted.begin(), rows_when_interrupted.end(), rows.begin()));
   }
+}
+
+TEST_CASE("live run: a link planted at --out is refused, not written through (the live CSV grows in place)", "[usb][run]") {
+  yelan::test::CliTempDir dir("live-link");
+  REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "3", "-o", dir / "w.h5"}).code == 0);
+  const std::string victim = dir / "victim";
+  { std::ofstream(victim) << "precious"; }
+  REQUIRE(::symlink(victim.c_str(), (dir / "p.csv").c_str()) == 0);
+  Live cam;
+  for (const auto& b : buffers(2)) cam.t.queue_buffer(b);
+  yelan::cli::LiveRun live;
+  live.setup.weights = dir / "w.h5";
+  live.setup.out = dir / "p.csv";
+  live.camera_name = "fake DAVIS346";
+  std::ostringstream out, err;
+  CHECK_THROWS_WITH(yelan::cli::run_live(cam.d, cam.t, live, [] { return true; }, out, err),
+                    Catch::Contains("is a symbolic link: refusing to write through it"));
+  CHECK(slurp(victim) == "precious");
 }
 
 TEST_CASE("yelan run --camera without a camera exits 1 with a clear message; --camera with a FILE is a usage error", "[usb][run]") {
