@@ -237,57 +237,63 @@ void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, float* d
       }
 }
 
-// dw[ob][cb][kh][kw][ci][:] = sum over n, oh, ow of x[n][cb][ih][iw][ci] * dy[n][ob][oh][ow][:]
-// with CONV_DW_CT input lanes in accumulators at a time. One task per (ob, cb, kh, kw):
-// tasks never share output, so no reduction between threads.
+// dw[ob][cb][kh][kw][ci][:] = sum over n, oh, ow of x[n][cb][ih][iw][ci] * dy[n][ob][oh][ow][:].
+// One row of dy against one row of x for one tap and CT input lanes; the accumulators live
+// in dw between rows, so each sum still runs over (n, oh, ow) in order, bit for bit.
 template <int CT>
-void dw_pass(const ConvShape& s, const float* x, const float* dy, int ob, int cb, int kh, int kw,
-             int c0, float* out) {
-  const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb(), st = s.stride;
-  const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
-  const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
+void dw_row(const float* g, const float* xr, int ow_lo, int ow_hi, int st, int x_off, float* out) {
   vf acc[CT][CONV_NV];
 #pragma GCC unroll 16
   for (int c = 0; c < CT; ++c)
 #pragma GCC unroll 4
-    for (int q = 0; q < CONV_NV; ++q) acc[c][q] = vf{};
-  const int ow_lo = std::max(0, ceil_div(s.pad_w - kw, st));
-  const int ow_hi = std::min(OW, floor_div(s.iw - 1 + s.pad_w - kw, st) + 1);
-  for (int n = 0; n < s.n; ++n)
-    for (int oh = 0; oh < OH; ++oh) {
-      const int ih = oh * st - s.pad_h + kh;
-      if (ih < 0 || ih >= s.ih) continue;
-      const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
-      const float* xr = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane + std::ptrdiff_t(ih) * s.iw * kBlock + c0;
-      for (int ow = ow_lo; ow < ow_hi; ++ow) {
-        vf d[CONV_NV];
+    for (int q = 0; q < CONV_NV; ++q) acc[c][q] = loadf(out + c * kBlock + q * VL);
+  for (int ow = ow_lo; ow < ow_hi; ++ow) {
+    vf d[CONV_NV];
 #pragma GCC unroll 4
-        for (int q = 0; q < CONV_NV; ++q) d[q] = loadf(g + std::ptrdiff_t(ow) * kBlock + q * VL);
-        const float* xp = xr + std::ptrdiff_t(ow * st - s.pad_w + kw) * kBlock;
+    for (int q = 0; q < CONV_NV; ++q) d[q] = loadf(g + std::ptrdiff_t(ow) * kBlock + q * VL);
+    const float* xp = xr + std::ptrdiff_t(ow * st + x_off) * kBlock;
 #pragma GCC unroll 16
-        for (int c = 0; c < CT; ++c)
+    for (int c = 0; c < CT; ++c)
 #pragma GCC unroll 4
-          for (int q = 0; q < CONV_NV; ++q) acc[c][q] += xp[c] * d[q];
-      }
-    }
+      for (int q = 0; q < CONV_NV; ++q) acc[c][q] += xp[c] * d[q];
+  }
 #pragma GCC unroll 16
   for (int c = 0; c < CT; ++c)
 #pragma GCC unroll 4
-    for (int q = 0; q < CONV_NV; ++q) storef(out + (c0 + c) * kBlock + q * VL, acc[c][q]);
+    for (int q = 0; q < CONV_NV; ++q) storef(out + c * kBlock + q * VL, acc[c][q]);
 }
 
+// One task per (ob, cb, kh): tasks never share output, so no reduction between threads. A
+// task walks dy once, using each row for every kw and every CT-lane group while it is in L1:
+// a pass over the whole batch per (tap, lane group) streamed the training stem's 23 MB dy
+// 196 times a step on AVX2. Input lanes past s.ic are zero padding; their dw stays zero.
 void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias) {
-  const int ICB = s.icb(), OCB = s.ocb(), K = s.kh * s.kw;
-  const std::ptrdiff_t y_plane = std::ptrdiff_t(s.oh()) * s.ow() * kBlock;
+  const int ICB = s.icb(), OCB = s.ocb(), K = s.kh * s.kw, OH = s.oh(), OW = s.ow(), st = s.stride;
+  const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
+  const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
+  const std::ptrdiff_t w_tap = kBlock * kBlock;
 #pragma omp parallel
   {
 #pragma omp for collapse(3) schedule(dynamic)
     for (int ob = 0; ob < OCB; ++ob)
       for (int cb = 0; cb < ICB; ++cb)
-        for (int k = 0; k < K; ++k) {
-          float* out = dw + ((std::ptrdiff_t(ob) * ICB + cb) * K + k) * kBlock * kBlock;
-          for (int c0 = 0; c0 < kBlock; c0 += CONV_DW_CT)
-            dw_pass<CONV_DW_CT>(s, x, dy, ob, cb, k / s.kw, k % s.kw, c0, out);
+        for (int kh = 0; kh < s.kh; ++kh) {
+          float* out = dw + ((std::ptrdiff_t(ob) * ICB + cb) * K + kh * s.kw) * w_tap;
+          std::fill(out, out + s.kw * w_tap, 0.f);
+          const int lanes = std::min(kBlock, s.ic - cb * kBlock);
+          for (int n = 0; n < s.n; ++n)
+            for (int oh = 0; oh < OH; ++oh) {
+              const int ih = oh * st - s.pad_h + kh;
+              if (ih < 0 || ih >= s.ih) continue;
+              const float* g = dy + (std::ptrdiff_t(n) * OCB + ob) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
+              const float* xr = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane + std::ptrdiff_t(ih) * s.iw * kBlock;
+              for (int kw = 0; kw < s.kw; ++kw) {
+                const int ow_lo = std::max(0, ceil_div(s.pad_w - kw, st));
+                const int ow_hi = std::min(OW, floor_div(s.iw - 1 + s.pad_w - kw, st) + 1);
+                for (int c0 = 0; c0 < lanes; c0 += CONV_DW_CT)
+                  dw_row<CONV_DW_CT>(g, xr + c0, ow_lo, ow_hi, st, kw - s.pad_w, out + kw * w_tap + c0 * kBlock);
+              }
+            }
         }
     if (dbias) {
 #pragma omp for schedule(static)
