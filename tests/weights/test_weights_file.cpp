@@ -4,6 +4,7 @@
 #include <fstream>
 #include <iterator>
 
+#include "camera/io/untrusted.h"
 #include "weights_test_util.h"
 
 using namespace yelan;
@@ -100,6 +101,19 @@ TEST_CASE("weights file: reads what h5py writes (variable-length UTF-8 attribute
   const auto& count = w.groups.at("pose").at("in_cnn.1.num_batches_tracked");
   CHECK(count.shape.empty());
   CHECK(count.data == std::vector<float>{16777216.f});
+}
+
+// Found by CI's fuzz run: on this file Debian 12's libhdf5 (1.10.8) loops inside its own
+// reader, so only the vetting child's CPU limit ends the read. The shipped limit is 120 s;
+// a 2 s limit shows the same refusal in a test's time.
+TEST_CASE("weights file: one on which libhdf5 spins is refused at the vetting child's CPU limit", "[weights]") {
+  const std::string hang = (std::filesystem::path(__FILE__).parent_path().parent_path() / "fuzz" / "hangs" /
+                            "weights-libhdf5-spins-120s.h5").string();
+  REQUIRE(std::filesystem::exists(hang));
+  camera::UntrustedLimits quick;
+  quick.seconds = 2;
+  CHECK_THROWS_WITH(camera::vet_in_child(hang, [&] { weights::load_weights(hang); }, quick),
+                    Catch::Contains("more than 2 s of CPU"));
 }
 
 TEST_CASE("weights file: foreign and damaged files give one exact message each", "[weights]") {
