@@ -161,6 +161,9 @@ TEST_CASE("an output that is one of the inputs is refused with exit 2, naming it
       {{"eval", "--weights", w, "--data", d / "recs", "--json", soft}, "--json " + soft},
       {{"sim", "--config", scene, "-o", scene}, "-o " + scene},
       {{"run", "--weights", w, in, "--out", hard}, "--out " + hard},
+      {{"bench", "kernels", "--from", cfg, "--chart", cfg}, "--chart " + cfg},
+      {{"bench", "early-exit", "--weights", w, "--chart", soft}, "--chart " + soft},
+      {{"bench", "train", "--config", cfg, "--keep-data", cfg}, "--keep-data " + cfg},
   };
   const std::string in_bytes = slurp(in), w_bytes = slurp(w), cfg_bytes = slurp(cfg);
   for (const auto& [argv, names] : cases) {

@@ -22,6 +22,7 @@
 #include "benchmarks/kernels/timing.h"
 #include "benchmarks/kernels/torch_reference.h"
 #include "engine/cli/args.h"
+#include "engine/cli/output_path.h"
 #include "engine/threads.h"
 #include "kernels/conv.h"
 #include "kernels/peak.h"
@@ -121,6 +122,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
 
   std::vector<Record> recs;
   std::vector<ConvCase> used;
+  if (const auto chart = args.value("--chart")) cli::check_output("--chart", *chart, {args.value_or("--from", "")});
   if (auto from = args.value("--from")) {  // re-render saved results: no measuring
     std::ifstream f(*from);
     if (!f) throw cli::UsageError("--from: cannot read " + *from);

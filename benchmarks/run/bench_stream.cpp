@@ -9,6 +9,7 @@
 #include "benchmarks/run/xy_chart.h"
 #include "camera/sim/presets.h"
 #include "engine/cli/args.h"
+#include "engine/cli/output_path.h"
 #include "engine/run/stream_eval.h"
 #include "engine/threads.h"
 #include "engine/train/evaluate.h"
@@ -29,6 +30,7 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
   a.expect_positionals(0, 0);
   const auto w = a.value("--weights");
   if (!w) throw cli::UsageError(std::string(what.command) + " needs --weights W");
+  if (const auto chart = a.value("--chart")) cli::check_output("--chart", *chart, {*w});
   std::vector<double> values;
   for (const auto& v : cli::split_list(a.value_or("--values", what.defaults))) {
     double d = 0;

@@ -19,6 +19,7 @@
 #include "camera/sim/presets.h"
 #include "camera/sim/window_stream.h"
 #include "engine/adam.h"
+#include "engine/cli/output_path.h"
 #include "engine/losses.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
@@ -426,6 +427,7 @@ int run_train_bench(const std::vector<std::string>& argv, std::ostream& out, std
   const auto scenes = scenes_of(args.value_or("--sim", "train"));
   const bool torch = !args.flag("--no-torch");
   const auto keep = args.value("--keep-data");
+  if (keep) cli::check_output("--keep-data", *keep, {config});
 
   std::vector<StageData> data;
   for (const auto& s : stages) {
