@@ -196,6 +196,23 @@ TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bi
   CHECK(yelan::test::contains(none.err, "no recordings"));
 }
 
+TEST_CASE("train: the validation windows come from every recording of the val split in turn", "[train][cli]") {
+  yelan::test::CliTempDir d("train-val-spread");
+  std::filesystem::create_directories(d / "ds/train");
+  std::filesystem::create_directories(d / "ds/val");
+  const std::string rec = d / "ds/train/t.yelan.h5";
+  REQUIRE(yelan::test::run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.4s", "-o", rec}).code == 0);
+  // Twelve validation recordings (copies under their own names): the training stream's 8
+  // cursors would draw 12 windows from at most 8 of them.
+  for (int i = 0; i < 12; ++i)
+    std::filesystem::copy_file(rec, d / ("ds/val/v" + std::to_string(100 + i) + ".yelan.h5"));
+  const auto r = yelan::test::run_cli({"train", "--stage", "pose", "--config", "micro", "--data", d / "ds", "--epoch-steps", "1",
+                                       "--val-windows", "12", "--batch", "8", "-o", d / "run", "--steps", "1"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(yelan::test::contains(r.err, "validation: 12 windows from 12 of 12 recordings"));
+}
+
 #include "camera/sim/presets.h"
 #include "camera/sim/window_stream.h"
 #include "engine/train/batch.h"

@@ -193,7 +193,7 @@ void RecordingWindowStream::next(SimWindow& out) {
   const std::size_t S = std::size_t(opt_.window);
   if (opt_.shuffle && (opt_.cursors > 1 || opt_.windows_per_visit > 1)) return next_from_cursor(out);
   if (opt_.shuffle) {
-    const std::size_t i = hash64(seed_, 0x5c3e, k_) % paths_.size();
+    const std::size_t i = opt_.spread ? k_ % paths_.size() : hash64(seed_, 0x5c3e, k_) % paths_.size();
     Open& r = open(i);
     const int fits = int(r.info.mask_t.size()) - int(r.first_mask) - int(S) + 1;
     if (fits < 1)

@@ -45,6 +45,8 @@ struct WindowStreamOptions {
   // recording serves `windows_per_visit` windows at seeded times in increasing order, read
   // in one pass, so the 5 s of history is read once per visit, not once per window.
   int cursors = 1, windows_per_visit = 1;
+  bool spread = false;              // recordings, shuffled, one cursor: window k from recording
+                                    // k mod n (each in turn, so a small sample covers the split)
   bool counts = false;              // also fill SimFrame::counts (constant-time event frames)
 };
 
