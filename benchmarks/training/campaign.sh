@@ -8,6 +8,7 @@
 #   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
+# THREADS (default 1: two runs side by side; 2 for one run alone, bit-exact either way).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 Y=${Y:-build/release/yelan}
@@ -30,7 +31,7 @@ train() {
   local resume=()
   [ -f "$RUNS/$name/checkpoint.state" ] && resume=(--resume)
   "$Y" train --stage "$stage" --config "$CFG" --data "$DATA" -o "$RUNS/$name" --steps "$steps" --batch 8 \
-    --epoch-steps 250 --val-windows 48 --patience 1000 --checkpoint-minutes 5 --threads 1 --quiet "${resume[@]}" "$@" \
+    --epoch-steps 250 --val-windows 48 --patience 1000 --checkpoint-minutes 5 --threads "${THREADS:-1}" --quiet "${resume[@]}" "$@" \
     > "$RUNS/$name.out" 2>&1
 }
 
