@@ -4,9 +4,11 @@ validation windows) against the training frames seen and against CPU-hours, one 
 with the floors of an eval JSON (trivial predictors on the test frames) as dashed lines.
 Reads RUN/log.csv and RUN/run.json as `yelan train` writes them. Standard library only.
   benchmarks/training/curves.py RUN [RUN ...] --out CHART.svg [--floors EVAL.json] [--csv OUT.csv]
+                               [--mark STEP:TEXT ...]
 Also prints, per run, the best validation MPJPE, where it was reached and what it cost."""
 import argparse
 import csv
+import html
 import json
 import math
 import os
@@ -35,7 +37,7 @@ def load_run(path):
     return {"name": os.path.basename(os.path.normpath(path)), "meta": meta, "points": points}
 
 
-def svg_panel(x0, y0, w, h, runs, key, xlabel, ymax, floors, logx):
+def svg_panel(x0, y0, w, h, runs, key, xlabel, ymax, floors, logx, marks=()):
     out = []
     xs = [p[key] for r in runs for p in r["points"] if p[key] > 0]
     if not xs:
@@ -67,6 +69,14 @@ def svg_panel(x0, y0, w, h, runs, key, xlabel, ymax, floors, logx):
                    f'stroke-dasharray="5,4"/>')
         out.append(f'<text x="{x0 + w - 4}" y="{py(mm) - 3:.1f}" text-anchor="end" font-size="10" fill="#555">'
                    f'{name} {mm:.0f} mm</text>')
+    for step, text in marks:  # at the first run's first validation at or after STEP
+        at = next((p for p in runs[0]["points"] if p["step"] >= step and p[key] > 0), None)
+        if at is None:
+            continue
+        out.append(f'<line x1="{px(at[key]):.1f}" x2="{px(at[key]):.1f}" y1="{y0}" y2="{y0 + h}" stroke="#999" '
+                   f'stroke-dasharray="2,3"/>')
+        out.append(f'<text x="{px(at[key]) - 4:.1f}" y="{y0 + 14}" text-anchor="end" font-size="10" fill="#555">'
+                   f'{html.escape(text)}</text>')
     for i, r in enumerate(runs):
         pts = [p for p in r["points"] if p[key] > 0]
         if not pts:
@@ -84,7 +94,15 @@ def main():
     ap.add_argument("--floors", help="an eval JSON whose floors are drawn as dashed lines")
     ap.add_argument("--csv", help="also write the points as CSV")
     ap.add_argument("--title", default="Validation MPJPE (paper protocol) while training")
+    ap.add_argument("--mark", action="append", default=[], metavar="STEP:TEXT",
+                    help="a dotted vertical line at the first run's step STEP (e.g. where its validation sample changed)")
     a = ap.parse_args()
+    marks = []
+    for m in a.mark:
+        step, sep, text = m.partition(":")
+        if not sep or not step.isdigit():
+            ap.error(f"--mark {m!r}: expected STEP:TEXT, STEP a whole number")
+        marks.append((int(step), text))
     runs = [load_run(r) for r in a.runs]
     floors = {}
     if a.floors:
@@ -100,8 +118,8 @@ def main():
             f'<text x="{W / 2}" y="22" text-anchor="middle" font-size="15">{a.title}</text>',
             f'<text x="16" y="{H / 2}" transform="rotate(-90 16 {H / 2})" text-anchor="middle" font-size="12">'
             f'MPJPE (mm)</text>']
-    body += svg_panel(70, 50, 390, 300, runs, "frames", "training frames seen", ymax, floors, False)
-    body += svg_panel(560, 50, 390, 300, runs, "cpu_h", "CPU-hours", ymax, floors, False)
+    body += svg_panel(70, 50, 390, 300, runs, "frames", "training frames seen", ymax, floors, False, marks)
+    body += svg_panel(560, 50, 390, 300, runs, "cpu_h", "CPU-hours", ymax, floors, False, marks)
     for i, r in enumerate(runs):
         c = COLOURS[i % len(COLOURS)]
         y = 405
