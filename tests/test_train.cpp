@@ -61,6 +61,28 @@ TEST_CASE("train: MPJPE, PCK@150 and AUC by hand, paper protocol and root-aligne
   CHECK(r.scores().pck150_root == 1);
 }
 
+TEST_CASE("train: the error split puts an image-plane miss in pixels and a depth miss in mm", "[train]") {
+  Pose13 truth{}, pred{};
+  for (int j = 0; j < kJoints; ++j) truth[j] = {double(j) * 10, -50, 3000};
+  pred = truth;
+  pred[0][0] += 30;   // head: 30 mm sideways at 3 m, fx 300 -> 3 px, no depth error
+  pred[1][2] += 400;  // shoulder: 400 mm deeper, along its own ray: same pixel
+  for (int c = 0; c < 3; ++c) pred[1][std::size_t(c)] = truth[1][std::size_t(c)] * 3400 / 3000;
+  std::array<std::uint8_t, kJoints> valid;
+  valid.fill(1);
+  valid[12] = 0;
+  ErrorSplit e;
+  e.add(pred, truth, valid, 300, 300, 173, 130);
+  const ErrorSplitScores s = e.scores();
+  CHECK(s.image_px[0] == Approx(3.0));
+  CHECK(s.depth_mm[0] == Approx(0).margin(1e-9));
+  CHECK(s.image_px[1] == Approx(0).margin(1e-9));
+  CHECK(s.depth_mm[1] == Approx(400));
+  CHECK(s.n[12] == 0);  // never valid: n/a, not 0
+  CHECK(s.mean_image_px == Approx(3.0 / 12));
+  CHECK(s.mean_depth_mm == Approx(400.0 / 12));
+}
+
 TEST_CASE("train: a short run writes its log and checkpoints, and --resume continues bit-exactly", "[train][cli]") {
   yelan::test::CliTempDir d("train");
   const std::vector<std::string> base = {"train", "--stage", "pose", "--config", "micro", "--sim",
@@ -132,7 +154,8 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   const std::string js = yelan::test::slurp(d / "eval.json");
   for (const char* key : {"\"mpjpe_mm\"", "\"pck150\"", "\"auc\"", "\"mpjpe_root_mm\"", "\"frames\": 4", "\"by_condition\"",
                           "\"lighting\"", "\"mask_iou\"", "\"floors\"", "\"constant\"", "\"mean_pose_at_hip\"",
-                          "\"per_view_mean_pose_at_hip\"", "\"swap_share_by_view\"", "\"mask_iou_by_condition\""})
+                          "\"per_view_mean_pose_at_hip\"", "\"swap_share_by_view\"", "\"mask_iou_by_condition\"",
+                          "\"error_split\"", "\"mean_image_px\"", "\"scene\""})
     CHECK(yelan::test::contains(js, key));
   CHECK(yelan::test::contains(ev.out, ", IoU "));  // the mask IoU of each condition beside its MPJPE
   // Weights and state from different steps (a stop between the two writes) are refused.

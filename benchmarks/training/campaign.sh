@@ -4,7 +4,7 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|train|train-mask|train-mask-neg|train-mask-s2|train-pose|train-pose-small|save|restore|combine|all]
+#   benchmarks/training/campaign.sh [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-pose|train-pose-small|train-pose-looks|save|restore|combine|all]
 #   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
@@ -13,11 +13,24 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 Y=${Y:-build/release/yelan}
 DATA=${DATA:-/var/tmp/yelan-data/ds-s1}
+# The same draw with a new person in every training recording (--random-looks): val and the
+# empty scenes are ds-s1's files (hard links, or simulated again: the same bytes).
+DATA_LOOKS=${DATA_LOOKS:-/var/tmp/yelan-data/ds-s2}
 RUNS=${RUNS:-/var/tmp/yelan-data/runs}
 CFG=${CFG:-benchmarks/configs/small-pose0.125.json}
 POSE_STEPS=${POSE_STEPS:-14000}
 MASK_STEPS=${MASK_STEPS:-4000}
 what=${1:-all}
+
+dataset_looks() {
+  mkdir -p "$DATA_LOOKS/train" "$DATA_LOOKS/val"
+  if [ -d "$DATA/val" ]; then
+    ln -f "$DATA"/val/*.yelan.h5 "$DATA_LOOKS/val/" 2>/dev/null || true
+    ln -f "$DATA"/train/train-empty-*.yelan.h5 "$DATA_LOOKS/train/" 2>/dev/null || true
+  fi
+  "$Y" sim --dataset "$DATA_LOOKS" --seed 1 --train 320 --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
+    --random-looks --threads 2
+}
 
 dataset() {
   "$Y" sim --dataset "$DATA" --seed 1 --train 320 --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
@@ -38,6 +51,7 @@ train() {
 mkdir -p "$RUNS"
 case "$what" in
   dataset) dataset ;;
+  dataset-looks) dataset_looks ;;
   train)
     "$0" train-mask-s2 &
     "$0" train-pose &
@@ -53,6 +67,11 @@ case "$what" in
   # 0.125 net scored 243 mm on its own training recordings (above the per-view floor of
   # 173 mm on the same frames): it underfits, so the next step is width, not data.
   train-pose-small) CFG=weights_tools/configs/small.json train pose pose-small "${POSE_SMALL_STEPS:-8000}" --occlusion ;;
+  # The 1/8-width net from pose-p0125's last checkpoint (13065 steps on ds-s1, where its
+  # validation had been flat for 2000 steps) on the same motions and scenes with a new
+  # person in every training recording: does the looks' variety lift the validation?
+  train-pose-looks) DATA=$DATA_LOOKS train pose pose-looks "${POSE_LOOKS_STEPS:-4000}" --occlusion --lr 3e-4 \
+    --init "$RUNS/pose-p0125/checkpoint.h5" ;;
   # Stage 1 again, from mask-p0125's best, with the panning and shaking empty scenes the
   # dataset gained (the DAVIS recording has a moving camera and nobody in it).
   train-mask-neg) train mask mask-neg "${MASK_NEG_STEPS:-3000}" --lr 5e-4 --init "$RUNS/mask-p0125/best.h5" ;;
@@ -66,7 +85,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small mask-p0125 mask-neg mask-s2; do
+    for run in pose-p0125 pose-small pose-looks mask-p0125 mask-neg mask-s2; do
       [ -d "$RUNS/$run" ] || continue
       # A run stopped before its first checkpoint (or whose checkpoint was lost) keeps its log.
       if [ ! -f "$RUNS/$run/checkpoint.h5" ]; then
@@ -99,5 +118,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|train|train-mask|train-mask-neg|train-mask-s2|train-pose|train-pose-small|save|restore|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-pose|train-pose-small|train-pose-looks|save|restore|combine|all]" >&2; exit 2 ;;
 esac

@@ -1,6 +1,10 @@
 #include "camera/sim/characters.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
+
+#include "camera/sim/rng.h"
 
 namespace yelan::camera::sim {
 namespace {
@@ -126,6 +130,63 @@ const Character& character_by_name(const std::string& name) {
   std::string known;
   for (const Character& c : characters()) known += (known.empty() ? "" : ", ") + c.name;
   throw std::invalid_argument("unknown character '" + name + "' (known: " + known + ")");
+}
+
+namespace {
+
+// A cloth: plain in 40% of draws, else stripes, checks or a print with a second shade at
+// least 0.2 away (weaker contrast makes texture edges too faint to matter).
+Material random_cloth(Rng& r) {
+  Material m;
+  m.albedo = float(r.uniform(0.03, 0.8));
+  const double u = r.uniform();
+  m.pattern = u < 0.4 ? Pattern::plain : u < 0.65 ? Pattern::stripes : u < 0.85 ? Pattern::checks : Pattern::print;
+  m.albedo2 = m.albedo;
+  if (m.pattern != Pattern::plain) {
+    // The other shade 0.2-0.6 away, on whichever side has room.
+    const double d = r.uniform(0.2, 0.6) * (r.uniform() < 0.5 ? -1 : 1);
+    double a2 = m.albedo + d;
+    if (a2 < 0.02 || a2 > 0.85) a2 = m.albedo - d;
+    m.albedo2 = float(std::clamp(a2, 0.02, 0.85));
+    m.period_mm = float(r.uniform(20, 110));
+    m.print_seed = std::uint32_t(r.bits() & 0xffff);
+  }
+  return m;
+}
+
+Material random_plain(Rng& r, double lo, double hi) {
+  Material m;
+  m.albedo = m.albedo2 = float(r.uniform(lo, hi));
+  return m;
+}
+
+}  // namespace
+
+std::string looks_name(std::uint64_t seed) {
+  static const char* hex = "0123456789abcdef";
+  std::string n = "r";
+  for (int i = 4; i >= 0; --i) n += hex[(seed >> (4 * i)) & 15];
+  return n;
+}
+
+Character random_looks(const Character& base, std::uint64_t seed) {
+  Rng r(seed, 0x100c5);
+  Character c = base;
+  c.name = looks_name(seed);
+  c.shape.female = r.uniform() < 0.5;
+  c.shape.height_mm = r.uniform(1500, 1950);
+  c.shape.girth = r.uniform(0.8, 1.4);
+  c.clothing = Clothing(r.below(5));
+  c.hair = Hair(r.below(3));
+  c.hat = r.uniform() < 0.25;
+  c.skin = random_plain(r, 0.08, 0.45);
+  c.top = random_cloth(r);
+  c.bottom = random_cloth(r);
+  c.hair_material = random_plain(r, 0.02, 0.7);
+  c.hat_material = random_cloth(r);
+  c.shoes = random_plain(r, 0.03, 0.8);
+  c.stripes_along = r.uniform() < 0.5;
+  return c;
 }
 
 const char* clothing_name(Clothing clothing) {

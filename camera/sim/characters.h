@@ -49,4 +49,13 @@ const Character& character_by_name(const std::string& name);
 
 const char* clothing_name(Clothing clothing);
 
+// The same named character with new looks drawn from `seed`: body (sex, 1500-1950 mm,
+// girth 0.8-1.4), garment, hair, hat, skin and every material (plain or patterned, albedos
+// and pattern sizes over the cast's whole range). A training set drawn this way shows the
+// network a new person in every recording instead of the cast's nine, so it cannot learn
+// poses by recognising outfits.
+// Its name is looks_name(seed): "r" and 5 hex digits, no cast member's name.
+Character random_looks(const Character& base, std::uint64_t seed);
+std::string looks_name(std::uint64_t seed);
+
 }  // namespace yelan::camera::sim

@@ -93,7 +93,7 @@ const std::vector<std::string>& dataset_characters(const std::string& split) {
   throw std::invalid_argument("dataset split '" + split + "': expected train, val or test");
 }
 
-SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s) {
+SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s, bool random_looks) {
   const std::vector<std::string>& cast = dataset_characters(split);
   const bool test = split == "test";
   Rng r(hash64(seed, split_stream(split), std::uint64_t(i)), 0xda7a);
@@ -114,9 +114,11 @@ SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, doub
   s.girth_scale = r.uniform(0.9, 1.12);
   if (r.uniform() < 0.3) s.clothing = Clothing(r.below(5));
   draw_scene(r, {25, 2800, 4600, 900, 1600, 0.4, 0.75, 0.5, 0.15, 0.15}, duration_s, s);
+  // Its own stream, so the draws above stay what they were without random looks.
+  if (random_looks && split == "train") s.looks_seed = hash64(seed, 0x100c, std::uint64_t(i)) | 1;
   std::ostringstream name;
-  name << split << "-" << std::setw(5) << std::setfill('0') << i << "-" << s.character << "-" << s.motion << "-"
-       << scene_suffix(s);
+  name << split << "-" << std::setw(5) << std::setfill('0') << i << "-"
+       << (s.looks_seed ? looks_name(s.looks_seed) : s.character) << "-" << s.motion << "-" << scene_suffix(s);
   s.name = name.str();
   return s;
 }
@@ -155,6 +157,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"version", 1},
                                      {"seed", d.seed},
                                      {"duration_s", d.duration_s},
+                                     {"looks", d.random_looks ? "random per training recording" : "the cast's"},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"characters",
@@ -167,7 +170,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   for (const auto& [split, n] : {std::pair<std::string, int>{"train", d.train}, {"val", d.val}, {"test", d.test}}) {
     fs::create_directories(fs::path(d.out_dir) / split);
     for (int i = 0; i < n; ++i) {
-      Job j{split, dataset_member(split, i, d.seed, d.duration_s), ""};
+      Job j{split, dataset_member(split, i, d.seed, d.duration_s, d.random_looks), ""};
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

@@ -28,6 +28,9 @@ struct DatasetSpec {
   // their own seed stream (adding them never changes the dancer members).
   int train_empty = 0, val_empty = 0, test_empty = 0;
   double duration_s = 5;
+  // Training recordings each get new looks (random_looks: body, garment, hair, every
+  // material) instead of a cast member's; validation and test keep their held-out cast.
+  bool random_looks = false;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };
@@ -36,7 +39,9 @@ struct DatasetSpec {
 const std::vector<std::string>& dataset_characters(const std::string& split);
 
 // Member i of a split: the scene, motion and augmentation, and its file name.
-SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
+// random_looks: as DatasetSpec's (it changes only the training split's looks and names).
+SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s,
+                       bool random_looks = false);
 SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
 std::string dataset_file_name(const SimSpec& spec);
 

@@ -90,7 +90,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
   static const std::vector<std::string> known = {
       "preset", "name", "character", "motion", "speed", "mirror", "yaw_offset_deg", "static_legs", "view", "yaw_deg",
       "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "flicker", "background", "occluders",
-      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir"};
+      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir", "looks_seed"};
   for (auto& [key, value] : j.items())
     if (std::find(known.begin(), known.end(), key) == known.end())
       throw std::invalid_argument(what + ": unknown key '" + key + "'");
@@ -126,6 +126,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     // One line per JSON key, as SPEC names them: a table of fields, deliberately spelled out.
     num(j, "duration_s", s.duration_s);
     if (j.contains("seed")) s.seed = j.at("seed").get<std::uint64_t>();
+    if (j.contains("looks_seed")) s.looks_seed = j.at("looks_seed").get<std::uint64_t>();
     num(j, "label_hz", s.label_hz);
     num(j, "mask_hz", s.mask_hz);
     num(j, "max_step_s", s.max_step_s);

@@ -98,7 +98,7 @@ RecordingWriter::RecordingWriter(const std::string& path, const Simulator& sim) 
   const hid_t f = hid_t(yelan_h5_file(*impl_->writer));
   write_camera(f, cam);
   h5::write_attr_string(f, "scene", sim.description_json());
-  h5::write_attr_string(f, "character", spec.character);
+  h5::write_attr_string(f, "character", sim.character().name);
   h5::write_attr_string(f, "motion", spec.motion);
   h5::write_attr_string(f, "view", view_name(spec.scene.view));
   h5::write_attr_string(f, "lighting", light_name(spec.scene.light));

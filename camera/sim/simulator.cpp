@@ -48,6 +48,7 @@ Character varied_character(const SimSpec& spec) {
   if (!(spec.height_scale >= 0.7 && spec.height_scale <= 1.3) || !(spec.girth_scale >= 0.6 && spec.girth_scale <= 1.6))
     throw std::invalid_argument("height scale must be in [0.7, 1.3] and girth scale in [0.6, 1.6]");
   Character c = character_by_name(spec.character);
+  if (spec.looks_seed) c = random_looks(c, spec.looks_seed);
   c.shape.height_mm *= spec.height_scale;
   c.shape.girth *= spec.girth_scale;
   if (spec.clothing) c.clothing = *spec.clothing;
@@ -238,6 +239,7 @@ std::string Simulator::description_json() const {
       {"name", spec_.name},
       {"character", character_.name},
       {"clothing", clothing_name(character_.clothing)},
+      {"looks_seed", spec_.looks_seed},
       {"height_mm", character_.shape.height_mm},
       {"test_only_character", character_.test_only},
       {"dancer", spec_.dancer},

@@ -36,6 +36,9 @@ struct SimSpec {
   // Body and clothes varied around the named character (datasets draw them per recording).
   double height_scale = 1, girth_scale = 1;
   std::optional<Clothing> clothing;
+  // Nonzero: the character's looks are drawn from this seed (random_looks) and the recording
+  // names it looks_name(seed) instead; the scales and clothing above still apply on top.
+  std::uint64_t looks_seed = 0;
   // false: nobody in the scene (the room, its moving background, lights and noise alone);
   // labels are all invalid and masks empty. Negative data for stage 1's "nobody there".
   bool dancer = true;
@@ -89,6 +92,7 @@ class Simulator {
   double time_s() const { return t_; }
   // Runs from the current time to min(t_end_s, duration), feeding the sink.
   void run_until(double t_end_s, SimSink& sink);
+  const Character& character() const { return character_; }
   // The scene as JSON (character, clothing, motion, view, lighting, background, seed, ...).
   std::string description_json() const;
   const SimStats& stats() const { return stats_; }

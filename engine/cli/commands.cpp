@@ -38,7 +38,7 @@ const std::vector<Command>& commands() {
        "       yelan sim --grid train|test|all --out-dir DIR [--duration 2s] [--seed N] [--limit N]\n"
        "                 [--characters a,b] [--motions m,..] [--views v,..] [--lights l,..] [--backgrounds b,..] [--force]\n"
        "       yelan sim --dataset DIR [--seed N] [--train 400] [--val 40] [--test 60] [--duration 5s] [--threads T]\n"
-       "                 [--train-empty N] [--val-empty N] [--test-empty N]\n"
+       "                 [--train-empty N] [--val-empty N] [--test-empty N] [--random-looks]\n"
        "       yelan sim --list\n"
        "A character performs a CMU clip or a procedural dance in a scene; a ray caster renders\n"
        "it at an adaptive rate (>= 1 kHz) and a v2e-style pixel model makes the events. OUT holds\n"
@@ -54,7 +54,9 @@ const std::vector<Command>& commands() {
        "characters and clips; --*-empty add scenes with nobody in them (rooms, moving backgrounds,\n"
        "flicker, occluders, noise, a panning or shaking camera: stage 1's negatives). Parallel\n"
        "over --threads (default: all cores); resumable (done files are kept); the same seed gives\n"
-       "the same files.\n"
+       "the same files. --random-looks: every training recording a new person (body, garment,\n"
+       "hair, hat, skin and clothes' shades and patterns drawn per recording, named rXXXXX)\n"
+       "instead of one of the nine training characters; val and test keep their cast.\n"
        "Presets end in any of -occluded, -flicker, -pan (the camera sweeps +-6 deg every 8 s),\n"
        "-shake (a hand-held tremor) and -empty (nobody there).\n",
        cmd_sim, "the motion-to-event simulator (issue 6)"},
@@ -96,7 +98,8 @@ const std::vector<Command>& commands() {
        "floors (trivial predictors on the same frames: constant, mean_pose_at_hip,\n"
        "per_view_mean_pose_at_hip) and per view the share of frames where swapping left and\n"
        "right would be better; --json OUT writes mpjpe_mm, pck150, auc, mpjpe_root_mm,\n"
-       "frames, by_condition, floors, swap_share_by_view, ....\n"
+       "frames, by_condition (also per scene), floors, swap_share_by_view, error_split\n"
+       "(image-plane px and depth mm per joint, model and per-view floor), ....\n"
        "--run scores the deployed path instead: yelan run's pipeline on the same scenes (TORE of\n"
        "every event so far, stage 1 with early exit, depth from the body-height prior), each\n"
        "pose against the label at its time; JSON: deployed and paper (true head depth) scores.\n",

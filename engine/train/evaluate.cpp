@@ -1,5 +1,6 @@
 #include "engine/train/evaluate.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -62,6 +63,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   std::optional<Floors> floors;
   if (spec.floors) floors.emplace(training_floor_stats());
   SwapShare swaps;
+  ErrorSplit split, split_floor;
   // One scene or recording: `windows` windows from `next`, scored under `conditions`.
   auto score = [&](int windows, const std::function<void(sim::SimWindow&)>& next,
                    const std::map<std::string, std::string>& conditions) {
@@ -80,7 +82,12 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         for (const auto& [name, value] : conditions) cond[name][value].add(pred, b.truth_mm[std::size_t(t)], valid);
         const auto view = conditions.find("view");
         const std::string view_name = view != conditions.end() ? view->second : "";
-        if (floors) floors->add(b.truth_mm[std::size_t(t)], valid, b.k, b.z_ref[std::size_t(t)], view_name);
+        const Pose13& truth = b.truth_mm[std::size_t(t)];
+        split.add(pred, truth, valid, b.k.fx, b.k.fy, b.k.cx, b.k.cy);
+        if (floors) {
+          floors->add(truth, valid, b.k, b.z_ref[std::size_t(t)], view_name);
+          split_floor.add(floors->per_view_prediction(truth, view_name), truth, valid, b.k.fx, b.k.fy, b.k.cx, b.k.cy);
+        }
         swaps.add(pred, b.truth_mm[std::size_t(t)], valid, view_name.empty() ? "unknown" : view_name);
         const Pose13 swapped = swap_left_right(pred);
         const auto frame_error = [&](const Pose13& q) {
@@ -142,7 +149,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
            {"view", sim::view_name(s.scene.view)},
            {"character", s.character},
            {"clothing", sim::clothing_name(ch.clothing)},
-           {"occlusion", s.scene.occluders ? "occluded" : "clear"}});
+           {"occlusion", s.scene.occluders ? "occluded" : "clear"},
+           {"scene", s.name}});
     err << "[" << (i + 1) << "/" << total << "] " << s.name << ": MPJPE so far " << std::fixed << std::setprecision(1)
         << all.scores().mpjpe_mm << " mm\n";
   }
@@ -152,7 +160,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
     const int windows = std::min(max_windows, stream.windows_in(0));
     std::map<std::string, std::string> conditions = {{"lighting", r.lighting}, {"background", r.background},
                                                      {"view", r.view},         {"character", r.character},
-                                                     {"occlusion", r.occluded ? "occluded" : "clear"}};
+                                                     {"occlusion", r.occluded ? "occluded" : "clear"},
+                                                     {"scene", r.name}};
     try {
       conditions["clothing"] = sim::clothing_name(sim::character_by_name(r.character).clothing);
     } catch (const std::exception&) {
@@ -174,7 +183,11 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
     for (const auto& [value, iu] : values)
       if (iu.second > 0) res.mask_iou_by_condition[name][value] = iu.first / iu.second;
   res.scenes = total;
-  if (floors) res.floors = floors->scores();
+  res.split = split.scores();
+  if (floors) {
+    res.floors = floors->scores();
+    res.split_per_view_floor = split_floor.scores();
+  }
   res.swap_share_by_view = swaps.by_view();
   return res;
 }
@@ -185,6 +198,27 @@ nlohmann::ordered_json scores_json(const PoseScores& s) {
           {"pck150_root", s.pck150_root}, {"auc_root", s.auc_root}, {"frames", s.frames}};
 }
 using camera::sim::kJointNames;
+
+// image_px and depth_mm per joint (null: never visible) and their means over joints seen.
+nlohmann::ordered_json split_json(const ErrorSplitScores& s) {
+  nlohmann::ordered_json px, dz;
+  for (int i = 0; i < kJoints; ++i) {
+    const bool seen = s.n[std::size_t(i)] > 0;
+    px[kJointNames[i]] = seen ? nlohmann::ordered_json(s.image_px[std::size_t(i)]) : nlohmann::ordered_json(nullptr);
+    dz[kJointNames[i]] = seen ? nlohmann::ordered_json(s.depth_mm[std::size_t(i)]) : nlohmann::ordered_json(nullptr);
+  }
+  return {{"mean_image_px", s.mean_image_px}, {"mean_depth_mm", s.mean_depth_mm}, {"image_px", px}, {"depth_mm", dz}};
+}
+
+void split_row(std::ostream& o, const char* who, const ErrorSplitScores& s) {
+  o << "  " << who << ": mean " << s.mean_image_px << " px / " << s.mean_depth_mm << " mm;";
+  for (int i = 0; i < kJoints; ++i) {
+    o << " " << kJointNames[i] << " ";
+    if (s.n[std::size_t(i)]) o << s.image_px[std::size_t(i)] << "/" << s.depth_mm[std::size_t(i)];
+    else o << "n/a";
+  }
+  o << "\n";
+}
 }  // namespace
 
 std::string pose_scores_json(const PoseScores& s) { return scores_json(s).dump(); }
@@ -206,6 +240,9 @@ std::string eval_json(const EvalResult& r) {
   for (const auto& [view, share] : r.swap_share_by_view) sj[view] = share;
   j["swap_share_by_view"] = sj;
   j["swap_oracle"] = scores_json(r.swap_oracle);
+  j["error_split"] = nlohmann::ordered_json::object();
+  j["error_split"]["model"] = split_json(r.split);
+  if (r.split_per_view_floor) j["error_split"]["per_view_mean_pose_at_hip"] = split_json(*r.split_per_view_floor);
   nlohmann::ordered_json bc;
   for (const auto& [name, values] : r.by_condition)
     for (const auto& [value, s] : values) bc[name][value] = scores_json(s);
@@ -241,7 +278,21 @@ std::string eval_table(const EvalResult& r) {
   for (const auto& [view, share] : r.swap_share_by_view) o << "  " << view << " " << std::setprecision(0) << share * 100 << "%";
   o << std::setprecision(1) << " of frames; with the better of each pose and its swap (an oracle): MPJPE "
     << r.swap_oracle.mpjpe_mm << " mm, root-aligned " << r.swap_oracle.mpjpe_root_mm << " mm\n";
+  o << "error in the image (sensor px) / in depth (|dz| mm), per joint:\n";
+  split_row(o, "model", r.split);
+  if (r.split_per_view_floor) split_row(o, "per-view floor", *r.split_per_view_floor);
   for (const auto& [name, values] : r.by_condition) {
+    if (name == "scene") {
+      // One line per scene would drown the table: the worst few (all are in the JSON).
+      std::vector<std::pair<double, std::string>> worst;
+      for (const auto& [value, s] : values) worst.emplace_back(s.mpjpe_mm, value);
+      std::sort(worst.rbegin(), worst.rend());
+      o << "worst scenes (MPJPE mm, of " << worst.size() << "):";
+      for (std::size_t i = 0; i < std::min<std::size_t>(5, worst.size()); ++i)
+        o << "  " << worst[i].second << " " << worst[i].first;
+      o << "\n";
+      continue;
+    }
     o << name << ":";
     const auto ious = r.mask_iou_by_condition.find(name);
     for (const auto& [value, s] : values) {

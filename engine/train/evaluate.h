@@ -4,6 +4,7 @@
 // root-aligned, per joint and per condition, and the mask IoU of stage 1.
 #pragma once
 #include <map>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -41,6 +42,9 @@ struct EvalResult {
   // The same frames with each pose or its left/right swap, whichever is closer (an oracle):
   // how much of the error is telling left from right (front from back).
   PoseScores swap_oracle;
+  // Image-plane and depth error of the model and, with floors, of the per-view floor.
+  ErrorSplitScores split;
+  std::optional<ErrorSplitScores> split_per_view_floor;
 };
 
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err);

@@ -96,8 +96,12 @@ void Floors::add(const Pose13& truth, const std::array<std::uint8_t, kJoints>& v
   constant_.add(c, truth, valid);
   const auto hip = hip_centre(truth);
   at_hip_.add(at_hip(stats_.mean_rel, hip), truth, valid);
+  per_view_.add(per_view_prediction(truth, view), truth, valid);
+}
+
+Pose13 Floors::per_view_prediction(const Pose13& truth, const std::string& view) const {
   const auto it = stats_.view_rel.find(view);
-  per_view_.add(at_hip(it != stats_.view_rel.end() ? it->second : stats_.mean_rel, hip), truth, valid);
+  return at_hip(it != stats_.view_rel.end() ? it->second : stats_.mean_rel, hip_centre(truth));
 }
 
 std::map<std::string, PoseScores> Floors::scores() const {

@@ -35,6 +35,8 @@ class Floors {
   void add(const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid, const Intrinsics& k, double z_ref,
            const std::string& view);
   std::map<std::string, PoseScores> scores() const;
+  // What per_view_mean_pose_at_hip predicts for this frame.
+  Pose13 per_view_prediction(const Pose13& truth, const std::string& view) const;
 
  private:
   FloorStats stats_;

@@ -75,4 +75,41 @@ PoseScores PoseMetrics::scores() const {
   return s;
 }
 
+void ErrorSplit::add(const Pose13& pred, const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid, double fx,
+                     double fy, double cx, double cy) {
+  const auto project = [&](const std::array<double, 3>& p) {
+    return std::array<double, 2>{fx * p[0] / p[2] + cx, fy * p[1] / p[2] + cy};
+  };
+  for (int j = 0; j < kJoints; ++j) {
+    const auto& a = pred[std::size_t(j)];
+    const auto& b = truth[std::size_t(j)];
+    // A joint at or behind the camera has no image position.
+    if (!valid[std::size_t(j)] || a[2] <= 0 || b[2] <= 0) continue;
+    const auto pa = project(a), pb = project(b);
+    px_[std::size_t(j)] += std::hypot(pa[0] - pb[0], pa[1] - pb[1]);
+    dz_[std::size_t(j)] += std::abs(a[2] - b[2]);
+    ++n_[std::size_t(j)];
+  }
+}
+
+ErrorSplitScores ErrorSplit::scores() const {
+  ErrorSplitScores s;
+  double px = 0, dz = 0;
+  std::uint64_t n = 0;
+  for (std::size_t j = 0; j < std::size_t(kJoints); ++j) {
+    s.n[j] = n_[j];
+    if (n_[j] == 0) continue;
+    s.image_px[j] = px_[j] / double(n_[j]);
+    s.depth_mm[j] = dz_[j] / double(n_[j]);
+    px += px_[j];
+    dz += dz_[j];
+    n += n_[j];
+  }
+  if (n) {
+    s.mean_image_px = px / double(n);
+    s.mean_depth_mm = dz / double(n);
+  }
+  return s;
+}
+
 }  // namespace yelan::train

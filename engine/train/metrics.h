@@ -35,6 +35,28 @@ class PoseMetrics {
   std::uint64_t frames_ = 0;
 };
 
+// Where the error lies: per joint, the distance in the image (sensor pixels, both poses
+// projected with the camera's intrinsics) and along the optical axis (|dz|, mm). A net that
+// places joints well in the image but not in depth needs depth cues; one that misses in the
+// image does not see the limbs.
+struct ErrorSplitScores {
+  std::array<double, kJoints> image_px{}, depth_mm{};
+  std::array<std::uint64_t, kJoints> n{};
+  double mean_image_px = 0, mean_depth_mm = 0;
+};
+
+class ErrorSplit {
+ public:
+  // fx, fy, cx, cy: the camera's intrinsics (pixels).
+  void add(const Pose13& pred, const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid, double fx, double fy,
+           double cx, double cy);
+  ErrorSplitScores scores() const;
+
+ private:
+  std::array<double, kJoints> px_{}, dz_{};
+  std::array<std::uint64_t, kJoints> n_{};
+};
+
 // The 30 AUC thresholds: 0, 500/29, ..., 500 mm.
 double pck(const std::vector<double>& dist, double threshold_mm);
 double auc(const std::vector<double>& dist);
