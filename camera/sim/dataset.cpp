@@ -93,7 +93,8 @@ const std::vector<std::string>& dataset_characters(const std::string& split) {
   throw std::invalid_argument("dataset split '" + split + "': expected train, val or test");
 }
 
-SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s, bool random_looks) {
+SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s, bool random_looks,
+                       bool frame_dancer) {
   const std::vector<std::string>& cast = dataset_characters(split);
   const bool test = split == "test";
   Rng r(hash64(seed, split_stream(split), std::uint64_t(i)), 0xda7a);
@@ -116,6 +117,7 @@ SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, doub
   draw_scene(r, {25, 2800, 4600, 900, 1600, 0.4, 0.75, 0.5, 0.15, 0.15}, duration_s, s);
   // Its own stream, so the draws above stay what they were without random looks.
   if (random_looks && split == "train") s.looks_seed = hash64(seed, 0x100c, std::uint64_t(i)) | 1;
+  s.frame_dancer = frame_dancer;
   std::ostringstream name;
   name << split << "-" << std::setw(5) << std::setfill('0') << i << "-"
        << (s.looks_seed ? looks_name(s.looks_seed) : s.character) << "-" << s.motion << "-" << scene_suffix(s);
@@ -158,6 +160,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"seed", d.seed},
                                      {"duration_s", d.duration_s},
                                      {"looks", d.random_looks ? "random per training recording" : "the cast's"},
+                                     {"frame_dancer", d.frame_dancer},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"characters",
@@ -170,7 +173,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   for (const auto& [split, n] : {std::pair<std::string, int>{"train", d.train}, {"val", d.val}, {"test", d.test}}) {
     fs::create_directories(fs::path(d.out_dir) / split);
     for (int i = 0; i < n; ++i) {
-      Job j{split, dataset_member(split, i, d.seed, d.duration_s, d.random_looks), ""};
+      Job j{split, dataset_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

@@ -31,6 +31,9 @@ struct DatasetSpec {
   // Training recordings each get new looks (random_looks: body, garment, hair, every
   // material) instead of a cast member's; validation and test keep their held-out cast.
   bool random_looks = false;
+  // Every dancer recording frames its dancer (SimSpec::frame_dancer): without it, a clip
+  // started anywhere leaves a quarter of the joints out of the picture.
+  bool frame_dancer = false;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };
@@ -39,9 +42,10 @@ struct DatasetSpec {
 const std::vector<std::string>& dataset_characters(const std::string& split);
 
 // Member i of a split: the scene, motion and augmentation, and its file name.
-// random_looks: as DatasetSpec's (it changes only the training split's looks and names).
+// random_looks, frame_dancer: as DatasetSpec's (looks change only the training split's
+// looks and names; framing changes no draw, only where the motion is placed).
 SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s,
-                       bool random_looks = false);
+                       bool random_looks = false, bool frame_dancer = false);
 SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
 std::string dataset_file_name(const SimSpec& spec);
 

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
 #include "camera/sim/rng.h"
@@ -43,6 +44,25 @@ std::unique_ptr<Motion> make_motion(const SimSpec& spec, const BodyShape& shape)
                                 " (a BVH stem in the mocap folder, or 'dance' for a procedural dance)");
   return load_bvh_motion(path.string(), shape, spec.motion_options);
 }
+
+// A motion turned about the vertical and shifted on the floor (SimSpec::frame_dancer).
+class FramedMotion final : public Motion {
+ public:
+  FramedMotion(std::unique_ptr<Motion> inner, const Eigen::Matrix3d& turn, const Vec3& shift)
+      : inner_(std::move(inner)), turn_(turn), shift_(shift) {}
+  double duration_s() const override { return inner_->duration_s(); }
+  BodyPose at(double t_s) const override {
+    BodyPose p = inner_->at(t_s);
+    for (auto& v : p.p) v = turn_ * v - shift_;
+    return p;
+  }
+  std::string name() const override { return inner_->name(); }
+
+ private:
+  std::unique_ptr<Motion> inner_;
+  Eigen::Matrix3d turn_;
+  Vec3 shift_;
+};
 
 Character varied_character(const SimSpec& spec) {
   if (!(spec.height_scale >= 0.7 && spec.height_scale <= 1.3) || !(spec.girth_scale >= 0.6 && spec.girth_scale <= 1.6))
@@ -92,6 +112,21 @@ Simulator::Simulator(const SimSpec& spec)
   if (!(spec.step_lambda > 0) || !(spec.render_lambda > 0)) throw std::invalid_argument("step lambdas must be > 0");
   pixel_dt_ = spec.max_step_s;
   render_dt_ = std::max(spec.max_render_step_s, spec.max_step_s);
+  if (spec.frame_dancer && spec.dancer) frame_motion();
+}
+
+void Simulator::frame_motion() {
+  // Facing: the hips' left-to-right axis crossed with up, turned to -y (as a clip's first
+  // frame is, and as the views are defined).
+  const BodyPose p0 = motion_->at(motion_time(0));
+  const Vec3 f = (p0.p[kHipL] - p0.p[kHipR]).cross(Vec3::UnitZ());
+  const double a = std::atan2(f.y(), f.x());
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(-1.5707963267948966 - a, Vec3::UnitZ()).toRotationMatrix();
+  Vec3 mean = Vec3::Zero();
+  const int n = 25;
+  for (int i = 0; i < n; ++i) mean += turn * motion_->at(motion_time(spec_.duration_s * (i + 0.5) / n)).p[kPelvis];
+  mean /= n;
+  motion_ = std::make_unique<FramedMotion>(std::move(motion_), turn, Vec3(mean.x(), mean.y(), 0));
 }
 
 Simulator::~Simulator() = default;
@@ -240,6 +275,7 @@ std::string Simulator::description_json() const {
       {"character", character_.name},
       {"clothing", clothing_name(character_.clothing)},
       {"looks_seed", spec_.looks_seed},
+      {"frame_dancer", spec_.frame_dancer},
       {"height_mm", character_.shape.height_mm},
       {"test_only_character", character_.test_only},
       {"dancer", spec_.dancer},

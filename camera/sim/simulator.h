@@ -39,6 +39,12 @@ struct SimSpec {
   // Nonzero: the character's looks are drawn from this seed (random_looks) and the recording
   // names it looks_name(seed) instead; the scales and clothing above still apply on top.
   std::uint64_t looks_seed = 0;
+  // A clip played from anywhere (motion_offset_s, motion_begin) has the dancer wherever the
+  // mocap subject had walked to, often out of the picture, facing anywhere. true: the motion
+  // is turned so the dancer faces the view's way at the recording's start and shifted so the
+  // pelvis's mean floor position over the recording is the scene's centre. Datasets and
+  // evaluation scenes set it; presets keep the clip's own placement.
+  bool frame_dancer = false;
   // false: nobody in the scene (the room, its moving background, lights and noise alone);
   // labels are all invalid and masks empty. Negative data for stage 1's "nobody there".
   bool dancer = true;
@@ -107,6 +113,7 @@ class Simulator {
   SimSpec spec_;
   Character character_;
   std::unique_ptr<Motion> motion_;
+  void frame_motion();
   Dresser dresser_;
   Scene scene_;
   PixelModel pixel_;

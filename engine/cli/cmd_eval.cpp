@@ -30,7 +30,7 @@ namespace {
 int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
   if (spec.scenes.empty()) throw UsageError("eval --run needs --sim test|PRESETS (simulated scenes with labels)");
   std::vector<camera::sim::SimSpec> scenes = spec.scenes;
-  for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i);
+  for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i, spec.framed);
   const auto sims = run::simulate_scenes(scenes, spec.seed, spec.seconds_per_scene, std::max(0.1, spec.history_s), err);
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
@@ -53,7 +53,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta"},
-               {"--true-mask", "--no-floors", "--run"});
+               {"--true-mask", "--no-floors", "--run", "--unframed"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
@@ -65,6 +65,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   spec.seconds_per_scene = a.number_or("--seconds", 1, 0, 3600, true);
   spec.true_mask = a.flag("--true-mask");
   spec.floors = !a.flag("--no-floors");
+  spec.framed = !a.flag("--unframed");
   spec.history_s = a.number_or("--history", 5, 0, 60);
   if (data) {
     try {

@@ -42,7 +42,8 @@ std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count) {
   return out;
 }
 
-void place_in_clip(sim::SimSpec& s, std::uint64_t seed, std::size_t i) {
+void place_in_clip(sim::SimSpec& s, std::uint64_t seed, std::size_t i, bool framed) {
+  s.frame_dancer = framed;
   if (s.motion.rfind("dance", 0) != 0) s.motion_offset_s = 30 * sim::uniform01(seed, 0x0ff5e7, i);
 }
 
@@ -61,7 +62,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   std::map<std::string, std::map<std::string, std::pair<double, double>>> cond_iou;  // inter, union
   BatchBuilder builder(cfg, 1, spec.true_mask ? MaskSource::truth : MaskSource::net);
   std::optional<Floors> floors;
-  if (spec.floors) floors.emplace(training_floor_stats());
+  if (spec.floors) floors.emplace(training_floor_stats(240, 25, spec.framed));
   SwapShare swaps;
   ErrorSplit split, split_floor;
   // One scene or recording: `windows` windows from `next`, scored under `conditions`.
@@ -138,7 +139,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
     sim::SimSpec s = spec.scenes[i];
     sim::WindowStreamOptions so = o;
     // Anywhere in the clip, after history_s of events (a procedural dance has no clip end).
-    place_in_clip(s, spec.seed, i);
+    place_in_clip(s, spec.seed, i, spec.framed);
     so.warmup_s = std::max(o.warmup_s, spec.history_s);
     so.scene_s = so.warmup_s + max_windows * cfg.window / o.frame_hz + 1e-6;
     sim::SimWindowStream stream({s}, sim::hash64(spec.seed, 0xe7a1, i), so);

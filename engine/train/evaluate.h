@@ -26,6 +26,9 @@ struct EvalSpec {
   // `yelan run`); simulated scenes start anywhere in their clip and run this long first.
   double history_s = 5;
   bool floors = true;      // score the trivial predictors (floors.h) on the same frames
+  // Simulated scenes frame the dancer (place_in_clip); false: the clip's own placement, as
+  // every figure before this option was measured (dancers often partly out of the picture).
+  bool framed = true;
 };
 
 struct EvalResult {
@@ -54,8 +57,9 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err);
 std::vector<std::string> draw_test_scenes(std::uint64_t seed, int count);
 
 // Scene i of an evaluation starts anywhere in its clip (a seeded offset; procedural dances
-// have no clip end and start at 0).
-void place_in_clip(camera::sim::SimSpec& s, std::uint64_t seed, std::size_t i);
+// have no clip end and start at 0); framed: the dancer turned to the view and centred in
+// the picture over the scene (SimSpec::frame_dancer), as a dance game's player stands.
+void place_in_clip(camera::sim::SimSpec& s, std::uint64_t seed, std::size_t i, bool framed = true);
 
 // {"mpjpe_mm", "pck150", "auc", "mpjpe_root_mm", "pck150_root", "auc_root", "frames"} as JSON text.
 std::string pose_scores_json(const PoseScores& s);

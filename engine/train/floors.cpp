@@ -58,11 +58,11 @@ Pose13 swap_left_right(const Pose13& p) {
   return out;
 }
 
-FloorStats training_floor_stats(int members, int times) {
+FloorStats training_floor_stats(int members, int times, bool framed) {
   Mean norm, rel;
   std::map<std::string, Mean> view;
   for (int i = 0; i < members; ++i) {
-    const sim::SimSpec spec = sim::dataset_member("train", i, 1, 5.0);
+    const sim::SimSpec spec = sim::dataset_member("train", i, 1, 5.0, false, framed);
     const sim::Simulator s(spec);
     const sim::CameraModel& cam = s.camera();
     const Intrinsics k{cam.fx, cam.fy, cam.cx, cam.cy, cam.width, cam.height};

@@ -26,8 +26,9 @@ struct FloorStats {
 };
 
 // Means over `members` training-split dataset members (seed 1, the shipped dataset's) at
-// `times` instants each.
-FloorStats training_floor_stats(int members = 240, int times = 25);
+// `times` instants each; framed: with the dancer framed (SimSpec::frame_dancer), as the
+// frames scored are.
+FloorStats training_floor_stats(int members = 240, int times = 25, bool framed = true);
 
 class Floors {
  public:

@@ -179,3 +179,32 @@ TEST_CASE("dataset: random looks give each training recording a new person and l
   CHECK(s.character().name.rfind("r", 0) == 0);
   CHECK(s.description_json().find("\"looks_seed\"") != std::string::npos);
 }
+
+TEST_CASE("dataset: a framed dancer faces the view at the start and stays in the picture, wherever the clip starts", "[sim]") {
+  // Members of the val split start late in their clips (the last 15%): unframed, several
+  // leave the mocap subject out of the picture for the whole recording.
+  double valid_unframed = 0, valid_framed = 0;
+  int n = 0;
+  for (int i = 0; i < 16; ++i) {
+    const SimSpec u = dataset_member("val", i, 1, 5.0), f = dataset_member("val", i, 1, 5.0, false, true);
+    CHECK(f.seed == u.seed);
+    CHECK(f.motion_offset_s == u.motion_offset_s);
+    const Simulator su(u), sf(f);
+    // Facing the camera, a dancer's left hip is on the camera's right (+x); from behind, on its left.
+    const Label l0 = sf.label_at(0);
+    const double lr = l0.joints_mm[6].x() - l0.joints_mm[5].x();  // hipL - hipR
+    if (f.scene.view == View::front) CHECK(lr > 0);
+    if (f.scene.view == View::back) CHECK(lr < 0);
+    for (int k = 0; k < 25; ++k) {
+      const double t = 5.0 * (k + 0.5) / 25;
+      const Label lu = su.label_at(t), lf = sf.label_at(t);
+      for (int j = 0; j < kJointCount; ++j) valid_unframed += lu.valid[j], valid_framed += lf.valid[j];
+      n += kJointCount;
+    }
+    // The motion itself is untouched: the same pose up to a turn and a shift (bone lengths equal).
+    const Label a = su.label_at(1.0), b = sf.label_at(1.0);
+    CHECK((a.joints_mm[1] - a.joints_mm[7]).norm() == Approx((b.joints_mm[1] - b.joints_mm[7]).norm()).epsilon(1e-9));
+  }
+  CHECK(valid_unframed / n < 0.8);
+  CHECK(valid_framed / n > 0.95);
+}
