@@ -30,7 +30,7 @@ dataset_looks() {
     ln -f "$DATA"/val/val-empty-*.yelan.h5 "$DATA_LOOKS/val/" 2>/dev/null || true
     ln -f "$DATA"/train/train-empty-*.yelan.h5 "$DATA_LOOKS/train/" 2>/dev/null || true
   fi
-  "$Y" sim --dataset "$DATA_LOOKS" --seed 1 --train 320 --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
+  "$Y" sim --dataset "$DATA_LOOKS" --seed 1 --train "${LOOKS_TRAIN:-200}" --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
     --random-looks --frame-dancer --threads 2
 }
 
@@ -72,8 +72,11 @@ case "$what" in
   # The 1/8-width net from pose-p0125's last checkpoint (13065 steps on ds-s1, where its
   # validation had been flat for 2000 steps) on the same motions and scenes with a new
   # person in every training recording: does the looks' variety lift the validation?
-  train-pose-looks) DATA=$DATA_LOOKS train pose pose-looks "${POSE_LOOKS_STEPS:-4000}" --occlusion --lr 3e-4 \
-    --init "$RUNS/pose-p0125/checkpoint.h5" ;;
+  # --init needs a whole weights file: the checkpoint's pose group beside the shipped mask net.
+  train-pose-looks)
+    init="$RUNS/pose-p0125-13065.h5"
+    [ -f "$init" ] || "$Y" weights combine --mask models/default.h5 --pose "$RUNS/pose-p0125/checkpoint.h5" --config "$CFG" -o "$init"
+    DATA=$DATA_LOOKS train pose pose-looks "${POSE_LOOKS_STEPS:-4000}" --occlusion --lr 3e-4 --init "$init" ;;
   # Stage 1 again, from mask-p0125's best, with the panning and shaking empty scenes the
   # dataset gained (the DAVIS recording has a moving camera and nobody in it).
   train-mask-neg) train mask mask-neg "${MASK_NEG_STEPS:-3000}" --lr 5e-4 --init "$RUNS/mask-p0125/best.h5" ;;
