@@ -72,7 +72,7 @@ TEST_CASE("train: the error split puts an image-plane miss in pixels and a depth
   valid.fill(1);
   valid[12] = 0;
   ErrorSplit e;
-  e.add(pred, truth, valid, 300, 300, 173, 130);
+  e.add(pred, truth, valid, Intrinsics{300, 300, 173, 130, 346, 260});
   const ErrorSplitScores s = e.scores();
   CHECK(s.image_px[0] == Approx(3.0));
   CHECK(s.depth_mm[0] == Approx(0).margin(1e-9));

@@ -8,10 +8,15 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <set>
+#include <sstream>
 #include <tuple>
 
 #include "camera/io/format_error.h"
@@ -28,12 +33,85 @@ namespace yelan::camera {
 
 namespace {
 
+// The status-change time is part of a file's identity: unlike the modification time, no
+// user call sets it, so a file rewritten after it passed never looks like the one that did.
+using Identity = std::tuple<unsigned long long, unsigned long long, long long, long long, long long>;
+
 bool g_child = false;
 std::mutex g_mutex;
-std::set<std::tuple<dev_t, ino_t, off_t, long long>> g_passed;
+std::set<Identity> g_passed;
+// The vetting cache on disk (vet_cache_path()): loaded once, appended to by each pass.
+bool g_cache_loaded = false;
+std::string g_cache_override;
+bool g_cache_overridden = false;
 
-std::tuple<dev_t, ino_t, off_t, long long> identity(const struct stat& st) {
-  return {st.st_dev, st.st_ino, st.st_size, (long long)st.st_mtim.tv_sec * 1000000000LL + st.st_mtim.tv_nsec};
+long long ns(const struct timespec& t) { return (long long)t.tv_sec * 1000000000LL + t.tv_nsec; }
+
+Identity identity(const struct stat& st) {
+  return {(unsigned long long)st.st_dev, (unsigned long long)st.st_ino, (long long)st.st_size, ns(st.st_mtim), ns(st.st_ctim)};
+}
+
+// A file is remembered on disk only when its status changed this long before it was read:
+// status-change times are coarse (a kernel tick), and a file rewritten within one tick of
+// its vetting would otherwise keep the identity of the file that passed.
+constexpr long long kSettledNs = 2'000'000'000LL;
+
+std::string cache_path_locked() {
+  if (g_cache_overridden) return g_cache_override;
+  const char* env = std::getenv("YELAN_VET_CACHE");
+  if (env) return std::string(env) == "off" ? std::string() : std::string(env);
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg == '/') return std::string(xdg) + "/yelan/vetted-files";
+  if (const char* home = std::getenv("HOME"); home && *home == '/') return std::string(home) + "/.cache/yelan/vetted-files";
+  return {};
+}
+
+constexpr const char* kCacheTag = "yelan-vetted-v1";
+constexpr std::uintmax_t kCacheMaxBytes = 8u << 20;  // ~100k files; past it the cache starts afresh
+
+// Lines "yelan-vetted-v1 dev inode size mtime_ns ctime_ns"; anything else is skipped (a
+// cache is never a reason to fail, only a reason to skip a child).
+void load_cache_locked() {
+  if (g_cache_loaded) return;
+  g_cache_loaded = true;
+  const std::string path = cache_path_locked();
+  if (path.empty()) return;
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  if (ec) return;
+  if (size > kCacheMaxBytes) {
+    std::filesystem::remove(path, ec);
+    return;
+  }
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream f(line);
+    std::string tag;
+    unsigned long long dev = 0, ino = 0;
+    long long bytes = 0, mtime = 0, ctime = 0;
+    if (f >> tag >> dev >> ino >> bytes >> mtime >> ctime && tag == kCacheTag) g_passed.insert({dev, ino, bytes, mtime, ctime});
+  }
+}
+
+// One line in one append: concurrent trainings interleave whole lines.
+void remember_on_disk_locked(const Identity& id) {
+  const std::string path = cache_path_locked();
+  if (path.empty()) return;
+  std::error_code ec;
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path(), ec);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) return;
+  char line[160];
+  const int n = std::snprintf(line, sizeof line, "%s %llu %llu %lld %lld %lld\n", kCacheTag, std::get<0>(id), std::get<1>(id),
+                              std::get<2>(id), std::get<3>(id), std::get<4>(id));
+  if (n > 0 && n < int(sizeof line)) (void)!::write(fd, line, std::size_t(n));
+  ::close(fd);
+}
+
+long long now_ns() {
+  struct timespec t {};
+  ::clock_gettime(CLOCK_REALTIME, &t);
+  return ns(t);
 }
 
 // The process's address space now, in bytes (0 if unknown). A child inherits all of it, so
@@ -54,6 +132,20 @@ bool vetting_child() { return g_child; }
 void forget_vetted_files() {
   std::lock_guard<std::mutex> lock(g_mutex);
   g_passed.clear();
+  g_cache_loaded = true;  // the disk's entries are forgotten too, for the rest of this process
+}
+
+void use_vet_cache(const std::string& path) {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  g_cache_override = path;
+  g_cache_overridden = true;
+  g_passed.clear();
+  g_cache_loaded = false;
+}
+
+std::string vet_cache_path() {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  return cache_path_locked();
 }
 
 void vet_in_child(const std::string& path, const std::function<void()>& read_all, const UntrustedLimits& limits) {
@@ -62,8 +154,10 @@ void vet_in_child(const std::string& path, const std::function<void()>& read_all
   if (::stat(path.c_str(), &st) != 0) return;  // the real read says what is wrong
   {
     std::lock_guard<std::mutex> lock(g_mutex);
+    load_cache_locked();
     if (g_passed.count(identity(st))) return;
   }
+  const bool settled = now_ns() - ns(st.st_ctim) >= kSettledNs;
   const unsigned long long memory_limit = address_space_bytes() + limits.memory_bytes;
   const pid_t pid = ::fork();
   if (pid < 0) return;  // cannot isolate: read as before rather than refuse
@@ -98,6 +192,7 @@ void vet_in_child(const std::string& path, const std::function<void()>& read_all
     if (WEXITSTATUS(status) == 0) {
       std::lock_guard<std::mutex> lock(g_mutex);
       g_passed.insert(identity(st));
+      if (settled) remember_on_disk_locked(identity(st));
     }
     return;
   }

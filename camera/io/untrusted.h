@@ -5,8 +5,10 @@
 // limit and a time limit; only when the child finishes (or fails with an ordinary error,
 // which the real read then reports in full) does the process read it itself. A crash, a
 // sanitizer report, the memory limit or the time limit in the child becomes a FormatError
-// naming the file. A file that passed is remembered (path, size, modification time) so a
-// trainer reopening its recordings pays once.
+// naming the file. A file that passed is remembered (device, inode, size, modification and
+// status-change times) so a trainer reopening its recordings pays once; and, across
+// processes, in a cache file (vet_cache_path()), so a training or an evaluation over a
+// dataset of hundreds of recordings does not read every file twice each time it starts.
 #pragma once
 #include <functional>
 #include <string>
@@ -22,9 +24,20 @@ struct UntrustedLimits {
 // this file already passed or we are that child. Throws FormatError when the child died.
 void vet_in_child(const std::string& path, const std::function<void()>& read_all, const UntrustedLimits& limits = {});
 
-// Forgets which files passed (a fuzzer rewrites one scratch file faster than its
-// modification time moves).
+// Forgets which files passed, the cache file's entries included, for the rest of the
+// process (a fuzzer rewrites one scratch file faster than its modification time moves).
 void forget_vetted_files();
+
+// The cache of files that passed, shared by every process of the user: YELAN_VET_CACHE
+// (a path, or "off"), else $XDG_CACHE_HOME/yelan/vetted-files, else ~/.cache/yelan/vetted-files;
+// empty when there is none. A file goes in only when its status has not changed for 2 s
+// before it was read (status-change times are coarse), and any change to it (contents,
+// size, times, a new file at the path) makes it a stranger again.
+std::string vet_cache_path();
+
+// Uses `path` as the cache file from now on ("" for none), forgetting what passed so far;
+// for tests and tools that must not share the user's cache.
+void use_vet_cache(const std::string& path);
 
 // True inside the vetting child (nested readers skip vetting there).
 bool vetting_child();

@@ -76,6 +76,11 @@ BodyPose mirror_pose(const BodyPose& pose) {
   return m;
 }
 
+Eigen::Matrix3d turn_to_face_minus_y(const BodyPose& pose) {
+  const Vec3 f = (pose.p[kHipL] - pose.p[kHipR]).cross(Vec3::UnitZ());
+  return Eigen::AngleAxisd(-1.5707963267948966 - std::atan2(f.y(), f.x()), Vec3::UnitZ()).toRotationMatrix();
+}
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -247,9 +252,7 @@ class BvhMotion final : public Motion {
     // Alignment from the unaligned pose at t = 0.
     const BodyPose p0 = retarget(0.0);
     if (opt.recentre) {
-      const Vec3 f = (p0.p[kHipL] - p0.p[kHipR]).cross(Vec3::UnitZ());
-      const double a = std::atan2(f.y(), f.x());
-      align_ = Eigen::AngleAxisd(-kPi / 2 - a, Vec3::UnitZ()).toRotationMatrix();
+      align_ = turn_to_face_minus_y(p0);
       centre_ = Vec3(p0.p[kPelvis].x(), p0.p[kPelvis].y(), 0);
     }
     yaw_ = Eigen::AngleAxisd(opt.yaw_deg * kPi / 180, Vec3::UnitZ()).toRotationMatrix();

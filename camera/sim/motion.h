@@ -54,6 +54,10 @@ std::vector<Bone> body_bones(const BodyShape& shape);
 // Left/right swap of every pair and x -> -x (a reflection in the plane x = 0).
 BodyPose mirror_pose(const BodyPose& pose);
 
+// The turn about the world z axis that makes `pose` face -y (the rest facing and the views'
+// front), its facing taken from the hips: (left - right) x up.
+Eigen::Matrix3d turn_to_face_minus_y(const BodyPose& pose);
+
 // BVH axes (Y up, rest facing +Z) to ours (z up, rest facing -y): (X, Y, Z) -> (X, -Z, Y),
 // a proper rotation. BVH left (+X) stays our +x, which is a -y-facing character's left.
 inline Vec3 bvh_axes_to_world(const Eigen::Vector3d& v) { return Vec3(v.x(), -v.z(), v.y()); }

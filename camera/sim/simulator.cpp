@@ -116,12 +116,8 @@ Simulator::Simulator(const SimSpec& spec)
 }
 
 void Simulator::frame_motion() {
-  // Facing: the hips' left-to-right axis crossed with up, turned to -y (as a clip's first
-  // frame is, and as the views are defined).
-  const BodyPose p0 = motion_->at(motion_time(0));
-  const Vec3 f = (p0.p[kHipL] - p0.p[kHipR]).cross(Vec3::UnitZ());
-  const double a = std::atan2(f.y(), f.x());
-  const Eigen::Matrix3d turn = Eigen::AngleAxisd(-1.5707963267948966 - a, Vec3::UnitZ()).toRotationMatrix();
+  // Facing -y at the recording's start, as a clip's first frame is and as the views are defined.
+  const Eigen::Matrix3d turn = turn_to_face_minus_y(motion_->at(motion_time(0)));
   Vec3 mean = Vec3::Zero();
   const int n = 25;
   for (int i = 0; i < n; ++i) mean += turn * motion_->at(motion_time(spec_.duration_s * (i + 0.5) / n)).p[kPelvis];

@@ -84,10 +84,10 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         const auto view = conditions.find("view");
         const std::string view_name = view != conditions.end() ? view->second : "";
         const Pose13& truth = b.truth_mm[std::size_t(t)];
-        split.add(pred, truth, valid, b.k.fx, b.k.fy, b.k.cx, b.k.cy);
+        split.add(pred, truth, valid, b.k);
         if (floors) {
           floors->add(truth, valid, b.k, b.z_ref[std::size_t(t)], view_name);
-          split_floor.add(floors->per_view_prediction(truth, view_name), truth, valid, b.k.fx, b.k.fy, b.k.cx, b.k.cy);
+          split_floor.add(floors->per_view_prediction(truth, view_name), truth, valid, b.k);
         }
         swaps.add(pred, b.truth_mm[std::size_t(t)], valid, view_name.empty() ? "unknown" : view_name);
         const Pose13 swapped = swap_left_right(pred);

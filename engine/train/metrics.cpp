@@ -75,10 +75,10 @@ PoseScores PoseMetrics::scores() const {
   return s;
 }
 
-void ErrorSplit::add(const Pose13& pred, const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid, double fx,
-                     double fy, double cx, double cy) {
+void ErrorSplit::add(const Pose13& pred, const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid,
+                     const Intrinsics& k) {
   const auto project = [&](const std::array<double, 3>& p) {
-    return std::array<double, 2>{fx * p[0] / p[2] + cx, fy * p[1] / p[2] + cy};
+    return std::array<double, 2>{k.fx * p[0] / p[2] + k.cx, k.fy * p[1] / p[2] + k.cy};
   };
   for (int j = 0; j < kJoints; ++j) {
     const auto& a = pred[std::size_t(j)];

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "engine/train/pose_norm.h"
+
 namespace yelan::train {
 
 inline constexpr int kJoints = 13;
@@ -47,9 +49,8 @@ struct ErrorSplitScores {
 
 class ErrorSplit {
  public:
-  // fx, fy, cx, cy: the camera's intrinsics (pixels).
-  void add(const Pose13& pred, const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid, double fx, double fy,
-           double cx, double cy);
+  // k: the camera whose pixels the image-plane error is counted in.
+  void add(const Pose13& pred, const Pose13& truth, const std::array<std::uint8_t, kJoints>& valid, const Intrinsics& k);
   ErrorSplitScores scores() const;
 
  private:

@@ -6,17 +6,23 @@
 #include <sys/mman.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <memory>
+#include <thread>
 #include <vector>
 
 #include "camera/io/event_reader.h"
 #include "camera/io/event_writer.h"
 #include "camera/io/format_error.h"
 #include "camera/io/untrusted.h"
+#include "cli_util.h"
 #include "io_test_util.h"
+#include "test_util.h"
 
 using namespace yelan;
 
@@ -52,6 +58,69 @@ TEST_CASE("vetting in a child: a crash is an error naming the file, an ordinary 
   // ... unless it changed.
   test::write_text(good, "changed, and longer");
   CHECK_THROWS_AS(camera::vet_in_child(good, [] { ::raise(SIGSEGV); }), camera::FormatError);
+}
+
+namespace {
+std::size_t cache_lines(const std::string& path) {
+  std::ifstream in(path);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line);) n += !line.empty();
+  return n;
+}
+}  // namespace
+
+TEST_CASE("vetting: a settled file that passed is remembered in the cache file, across processes, until it changes",
+          "[io][h5][untrusted]") {
+  test::ScratchDir d("untrusted-cache");
+  const std::string cache = d.file("cache/vetted-files");
+  const auto crash = [] { ::raise(SIGSEGV); };
+  const std::string settled = d.file("settled.h5");
+  {
+    camera::StreamInfo info;
+    info.width = 32, info.height = 24;
+    auto w = camera::open_event_writer(settled, info);
+    const std::vector<camera::Event> ev = {{10, 1, 2, 1}, {20, 3, 4, 0}};
+    w->write(ev);
+    w->close();
+  }
+  std::filesystem::copy_file(settled, d.file("copy.h5"));
+  std::this_thread::sleep_for(std::chrono::milliseconds(2100));
+  const std::string fresh = d.file("fresh.h5");
+  test::write_text(fresh, "fresh");
+
+  camera::use_vet_cache(cache);  // as a new process would start: nothing known yet
+  CHECK_NOTHROW(camera::vet_in_child(settled, [] {}));
+  CHECK_NOTHROW(camera::vet_in_child(fresh, [] {}));
+  CHECK(cache_lines(cache) == 1);  // the fresh file could still change within the same time stamp
+
+  camera::use_vet_cache(cache);  // a new process
+  CHECK_NOTHROW(camera::vet_in_child(settled, crash));  // known from the cache: no child ran
+  CHECK_THROWS_AS(camera::vet_in_child(fresh, crash), camera::FormatError);
+
+  // The same bytes count, new contents: a stranger again.
+  {
+    std::string bytes = test::slurp(settled);
+    bytes[bytes.size() - 1] ^= 1;
+    test::write_text(settled, bytes);
+  }
+  camera::use_vet_cache(cache);
+  CHECK_THROWS_AS(camera::vet_in_child(settled, crash), camera::FormatError);
+
+  // A cache full of nonsense is no reason to fail, and no reason to trust anything.
+  test::write_text(cache, std::string("garbage\n\x01\x02 1 2 3\nyelan-vetted-v1 1 2\n") + std::string(300, 'x'));
+  camera::use_vet_cache(cache);
+  CHECK_THROWS_AS(camera::vet_in_child(settled, crash), camera::FormatError);
+
+  // Another process: yelan itself reads the path from YELAN_VET_CACHE.
+  const std::string other = d.file("cache/other");
+  ::setenv("YELAN_VET_CACHE", other.c_str(), 1);
+  const int code = test::run_binary(YELAN_BINARY, {"info", d.file("copy.h5")}, 60);
+  ::setenv("YELAN_VET_CACHE", "off", 1);
+  CHECK(code == 0);
+  CHECK(cache_lines(other) == 1);
+  camera::use_vet_cache(other);
+  CHECK_NOTHROW(camera::vet_in_child(d.file("copy.h5"), crash));
+  camera::use_vet_cache("");
 }
 
 TEST_CASE("every byte of an event HDF5 file's head, zeroed or bit-flipped: an error or events, never a crash",
@@ -99,9 +168,6 @@ TEST_CASE("every byte of an event HDF5 file's head, zeroed or bit-flipped: an er
   CHECK(refused > 0);
   CHECK(refused + read > 1000);
 }
-
-#include "cli_util.h"
-#include "test_util.h"
 
 TEST_CASE("the real DAVIS recording converted to ours, two known libhdf5 crashes planted: exit 2 from info, convert and run",
           "[io][h5][untrusted][cli]") {

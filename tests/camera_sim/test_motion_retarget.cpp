@@ -252,6 +252,24 @@ TEST_CASE("motion mirroring twice is the identity and the option mirrors the pos
   CHECK(q0.p[kHipL].x() > q0.p[kHipR].x());
 }
 
+TEST_CASE("motion: the turn to face -y makes any hip line face -y, and only turns about z") {
+  for (const double deg : {0.0, 37.0, 90.0, 179.0, -120.0}) {
+    const double a = deg * 3.14159265358979323846 / 180;
+    BodyPose p{};
+    // Facing (cos a, sin a, 0): the left hip is to the facing's left, the hips 1 m up.
+    const Vec3 left(-std::sin(a), std::cos(a), 0);
+    p.p[kHipL] = Vec3(100, 200, 1000) + 90 * left;
+    p.p[kHipR] = Vec3(100, 200, 1000) - 90 * left;
+    const Eigen::Matrix3d r = turn_to_face_minus_y(p);
+    const Vec3 l = r * p.p[kHipL], rr = r * p.p[kHipR];
+    INFO("facing " << deg << " deg");
+    CHECK(l.x() - rr.x() == Approx(180));  // a -y-facing body's left is +x
+    CHECK(std::abs(l.y() - rr.y()) < 1e-9);
+    CHECK((r * Vec3::UnitZ() - Vec3::UnitZ()).norm() < 1e-12);
+    CHECK(std::abs(r.determinant() - 1) < 1e-12);
+  }
+}
+
 TEST_CASE("motion time warp, yaw and clamping") {
   const std::string path = mocap("02_01");
   BodyShape shape;
