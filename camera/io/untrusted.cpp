@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <tuple>
@@ -40,10 +41,9 @@ using Identity = std::tuple<unsigned long long, unsigned long long, long long, l
 bool g_child = false;
 std::mutex g_mutex;
 std::set<Identity> g_passed;
-// The vetting cache on disk (vet_cache_path()): loaded once, appended to by each pass.
+// The vetting cache on disk (cache_path_locked()): loaded once, appended to by each pass.
 bool g_cache_loaded = false;
-std::string g_cache_override;
-bool g_cache_overridden = false;
+std::optional<std::string> g_cache_override;  // use_vet_cache's path, over the environment's
 
 long long ns(const struct timespec& t) { return (long long)t.tv_sec * 1000000000LL + t.tv_nsec; }
 
@@ -57,7 +57,7 @@ Identity identity(const struct stat& st) {
 constexpr long long kSettledNs = 2'000'000'000LL;
 
 std::string cache_path_locked() {
-  if (g_cache_overridden) return g_cache_override;
+  if (g_cache_override) return *g_cache_override;
   const char* env = std::getenv("YELAN_VET_CACHE");
   if (env) return std::string(env) == "off" ? std::string() : std::string(env);
   if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg == '/') return std::string(xdg) + "/yelan/vetted-files";
@@ -138,14 +138,8 @@ void forget_vetted_files() {
 void use_vet_cache(const std::string& path) {
   std::lock_guard<std::mutex> lock(g_mutex);
   g_cache_override = path;
-  g_cache_overridden = true;
   g_passed.clear();
   g_cache_loaded = false;
-}
-
-std::string vet_cache_path() {
-  std::lock_guard<std::mutex> lock(g_mutex);
-  return cache_path_locked();
 }
 
 void vet_in_child(const std::string& path, const std::function<void()>& read_all, const UntrustedLimits& limits) {

@@ -7,7 +7,7 @@
 // sanitizer report, the memory limit or the time limit in the child becomes a FormatError
 // naming the file. A file that passed is remembered (device, inode, size, modification and
 // status-change times) so a trainer reopening its recordings pays once; and, across
-// processes, in a cache file (vet_cache_path()), so a training or an evaluation over a
+// processes, in a cache file (see use_vet_cache()), so a training or an evaluation over a
 // dataset of hundreds of recordings does not read every file twice each time it starts.
 #pragma once
 #include <functional>
@@ -29,14 +29,12 @@ void vet_in_child(const std::string& path, const std::function<void()>& read_all
 void forget_vetted_files();
 
 // The cache of files that passed, shared by every process of the user: YELAN_VET_CACHE
-// (a path, or "off"), else $XDG_CACHE_HOME/yelan/vetted-files, else ~/.cache/yelan/vetted-files;
-// empty when there is none. A file goes in only when its status has not changed for 2 s
-// before it was read (status-change times are coarse), and any change to it (contents,
-// size, times, a new file at the path) makes it a stranger again.
-std::string vet_cache_path();
-
-// Uses `path` as the cache file from now on ("" for none), forgetting what passed so far;
-// for tests and tools that must not share the user's cache.
+// (a path, or "off"), else $XDG_CACHE_HOME/yelan/vetted-files, else ~/.cache/yelan/vetted-files.
+// A file goes in only when its status has not changed for 2 s before it was read
+// (status-change times are coarse), and any change to it (contents, size, times, a new
+// file at the path) makes it a stranger again.
+// use_vet_cache: `path` is the cache file from now on ("" for none), forgetting what passed
+// so far; for tests and tools that must not share the user's cache.
 void use_vet_cache(const std::string& path);
 
 // True inside the vetting child (nested readers skip vetting there).

@@ -69,6 +69,8 @@ std::vector<Bone> body_bones(const BodyShape& shape) {
   return b;
 }
 
+constexpr double kPi = 3.14159265358979323846;
+
 BodyPose mirror_pose(const BodyPose& pose) {
   BodyPose m = pose;
   for (auto& v : m.p) v.x() = -v.x();
@@ -78,12 +80,10 @@ BodyPose mirror_pose(const BodyPose& pose) {
 
 Eigen::Matrix3d turn_to_face_minus_y(const BodyPose& pose) {
   const Vec3 f = (pose.p[kHipL] - pose.p[kHipR]).cross(Vec3::UnitZ());
-  return Eigen::AngleAxisd(-1.5707963267948966 - std::atan2(f.y(), f.x()), Vec3::UnitZ()).toRotationMatrix();
+  return Eigen::AngleAxisd(-kPi / 2 - std::atan2(f.y(), f.x()), Vec3::UnitZ()).toRotationMatrix();
 }
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // ---------------------------------------------------------------- name mapping
 
