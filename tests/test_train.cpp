@@ -184,6 +184,52 @@ TEST_CASE("train: --steps fewer than --epoch-steps still validates at the end an
   CHECK_FALSE(yelan::test::contains(r.out + r.err, "1e30"));
 }
 
+TEST_CASE("train: the mask stage logs its validation mask IoU, and an older log gains the column on resume", "[train][cli]") {
+  yelan::test::CliTempDir d("train-mask-iou");
+  auto run = [&](const std::string& steps, std::vector<std::string> extra = {}) {
+    std::vector<std::string> v = {"train", "--stage", "mask", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                  "--epoch-steps", "1", "--val-windows", "1", "--batch", "1", "--threads", "1",
+                                  "-o", d / "m", "--steps", steps};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  auto rows = [&] {
+    std::istringstream in(yelan::test::slurp(d / "m/log.csv"));
+    std::vector<std::vector<std::string>> out;
+    for (std::string line; std::getline(in, line);) {
+      std::vector<std::string> cols;
+      std::istringstream l(line);
+      for (std::string c; std::getline(l, c, ',');) cols.push_back(c);
+      out.push_back(cols);
+    }
+    return out;
+  };
+  const auto first = run("2", {"--stop-at", "1"});
+  INFO(first.err);
+  REQUIRE(first.code == 0);
+  CHECK(yelan::test::contains(first.err, "validation mask IoU "));
+  auto r = rows();
+  REQUIRE(r.size() == 2);
+  REQUIRE(r[0].size() == 11);
+  CHECK(r[0][10] == "val_mask_iou");
+  const double iou = std::stod(r[1][10]);
+  CHECK(iou >= 0);
+  CHECK(iou <= 1);
+  // The log as an older trainer wrote it: no last column.
+  std::ofstream(d / "m/log.csv") << "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s,val_mpjpe_mm,cpu_s\n"
+                                 << r[1][0] << ",0,0.5,0.5,0.001,1,1,1,-1,1\n";
+  const auto resumed = run("2", {"--resume"});
+  INFO(resumed.err);
+  REQUIRE(resumed.code == 0);
+  r = rows();
+  REQUIRE(r.size() == 3);
+  CHECK(r[0][10] == "val_mask_iou");
+  REQUIRE(r[1].size() == 11);
+  CHECK(r[1][10] == "-1");
+  REQUIRE(r[2].size() == 11);
+  CHECK(std::stod(r[2][10]) >= 0);
+}
+
 TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bit-exactly, and eval --data scores them", "[train][cli]") {
   yelan::test::CliTempDir d("train-data");
   std::filesystem::create_directories(d / "rec");

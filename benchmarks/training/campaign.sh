@@ -4,7 +4,7 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-pose|train-pose-small|train-pose-looks|train-pose-small-looks|save|restore|combine|all]
+#   benchmarks/training/campaign.sh [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-small-looks|save|restore|combine|all]
 #   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
@@ -92,11 +92,21 @@ case "$what" in
     init="$RUNS/mask-init-89f0f09.h5"
     [ -f "$init" ] || git show 89f0f09:models/default.h5 > "$init"
     train mask mask-s2 "${MASK_S2_STEPS:-800}" --lr 5e-4 --init "$init" ;;
+  # Stage 1 on ds-s2 (a new person in every training recording, framed dancers, ds-s1's
+  # empty scenes), warm-started from mask-s2: the test cast wears what no ds-s1 character did.
+  train-mask-looks)
+    DATA=$DATA_LOOKS train mask mask-looks "${MASK_LOOKS_STEPS:-1200}" --lr 3e-4 --init "$RUNS/mask-s2/best.h5" ;;
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-small-looks mask-p0125 mask-neg mask-s2; do
+    for run in pose-p0125 pose-small pose-looks pose-small-looks mask-p0125 mask-neg mask-s2 mask-looks; do
       [ -d "$RUNS/$run" ] || continue
+      # A run restarted from scratch on a new machine must not overwrite a longer history.
+      if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
+         [ "$(wc -l < "$RUNS/$run/log.csv")" -lt "$(wc -l < "models/campaign/$run/log.csv")" ]; then
+        echo "$run: $RUNS/$run/log.csv is shorter than the committed one; not saved (move one of them aside)" >&2
+        continue
+      fi
       # A run stopped before its first checkpoint (or whose checkpoint was lost) keeps its log.
       if [ ! -f "$RUNS/$run/checkpoint.h5" ]; then
         echo "$run: no checkpoint in $RUNS/$run; only its log is saved" >&2
@@ -128,5 +138,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-pose|train-pose-small|train-pose-looks|train-pose-small-looks|save|restore|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-small-looks|save|restore|combine|all]" >&2; exit 2 ;;
 esac

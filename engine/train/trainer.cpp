@@ -22,6 +22,7 @@
 #include "camera/sim/rng.h"
 #include "camera/sim/recording_windows.h"
 #include "camera/sim/window_stream.h"
+#include "engine/input.h"
 #include "engine/losses.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
@@ -63,8 +64,9 @@ class StopOnSignal {
 
 constexpr char kStateMagic[8] = {'Y', 'E', 'L', 'A', 'N', 'T', 'R', 'N'};
 constexpr std::uint32_t kStateVersion = 3;
-constexpr const char* kLogHeader = "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s,val_mpjpe_mm,cpu_s";
-constexpr int kLogCommas = 9;
+constexpr const char* kLogHeader =
+    "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s,val_mpjpe_mm,cpu_s,val_mask_iou";
+constexpr int kLogCommas = 10;
 
 // The learning rate at a step under the spec's schedule (cosine: a function of the step
 // alone, so --resume needs nothing more).
@@ -159,7 +161,10 @@ void truncate_log(const std::string& path, std::int64_t step) {
   std::string line, kept = header + "\n";
   while (std::getline(in, line)) {
     // Only whole rows at or before the checkpoint (a crash can cut the last one short).
-    if (line == header || std::count(line.begin(), line.end(), ',') != kLogCommas) continue;
+    if (line.rfind("step,", 0) == 0) continue;  // a header, this one or an older one
+    const auto commas = std::count(line.begin(), line.end(), ',');
+    if (commas == kLogCommas - 1) line += ",-1";  // a row from before val_mask_iou
+    else if (commas != kLogCommas) continue;
     std::int64_t at = 0;
     try {
       at = std::stoll(line.substr(0, line.find(',')));
@@ -364,10 +369,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
           << " recordings\n";
   };
   struct ValScore {
-    double loss = 0, mpjpe_mm = -1;
+    double loss = 0, mpjpe_mm = -1, mask_iou = -1;
   };
-  // Mean loss (and, for the pose stage, MPJPE in mm under the paper protocol) of the net in
-  // eval mode over the validation windows.
+  // Mean loss of the net in eval mode over the validation windows, and what a reader
+  // understands: for the pose stage MPJPE in mm (paper protocol), for the mask stage the IoU
+  // of the current mask, cut where yelan run cuts it, against the true one.
   auto validate = [&] {
     if (val_batches.empty()) build_validation();
     mask.set_training(false);
@@ -375,6 +381,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     double sum = 0;
     PoseMetrics metrics;
     int windows = 0;
+    double inter = 0, uni = 0;
+    std::vector<float> keep;
     for (const auto& vb : val_batches) {
       const Batch& b = vb->batch();
       const int nw = b.frames / cfg.window;
@@ -391,6 +399,16 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         layers::Floats dm(mask.masks().floats());
         std::vector<float> ds;
         sum += mask_loss(mask, b.labels.act, {dm.data(), mask.masks().n, mask.masks().c, mask.masks().h, mask.masks().w}, ds).total * nw;
+        const layers::Act& m = mask.masks();
+        for (int i = 0; i < m.n; ++i) {
+          input::mask_cut(m, i, 0, keep);
+          const float* truth = b.labels.act.data + std::size_t(i) * m.cb() * m.pixels() * 16;
+          for (std::size_t p = 0; p < keep.size(); ++p) {
+            const bool pr = keep[p] > 0, tr = truth[p * 16] > 0.5f;
+            inter += pr && tr;
+            uni += pr || tr;
+          }
+        }
       }
       windows += nw;
     }
@@ -399,6 +417,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     ValScore v;
     v.loss = sum / windows;
     if (pose_stage) v.mpjpe_mm = metrics.scores().mpjpe_mm;
+    else v.mask_iou = uni > 0 ? inter / uni : 1;  // nobody in any window, and no mask: all right
     return v;
   };
 
@@ -454,11 +473,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     result.frames += std::int64_t(spec.batch) * cfg.window;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double sps = spec.batch * cfg.window / dt;
-    double val = -1, val_mm = -1;
+    double val = -1, val_mm = -1, val_iou = -1;
     const bool epoch_end = st.step % spec.steps_per_epoch == 0 || st.step == spec.steps;
     if (epoch_end) {
       const ValScore v = validate();
-      val = v.loss, val_mm = v.mpjpe_mm;
+      val = v.loss, val_mm = v.mpjpe_mm, val_iou = v.mask_iou;
       adam.end_epoch();
       if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
       const double crit = pose_stage ? val_mm : val;  // pose: selected by validation MPJPE (mm)
@@ -473,7 +492,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC + cpu_base;
     log << st.step << "," << adam.epochs() << "," << std::setprecision(9) << loss << "," << val << "," << adam.lr() << ","
         << grad_norm << "," << std::setprecision(4) << sps << "," << wall << "," << val_mm << "," << std::setprecision(6)
-        << cpu << "\n";
+        << cpu << "," << std::setprecision(4) << val_iou << "\n";
     log.flush();
     const double eta = wall / double(st.step - first_step) * double(spec.steps - st.step);
     if (spec.progress_tty)
@@ -484,7 +503,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     if (epoch_end)
       err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
           << ", validation " << val << " (best " << st.best_val << ")"
-          << (val_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(val_mm))) + " mm" : "") << ", " << sps
+          << (val_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(val_mm))) + " mm" : "")
+          << (val_iou >= 0 ? ", validation mask IoU " + std::to_string(val_iou).substr(0, 5) : "") << ", " << sps
           << " samples/s, lr " << adam.lr() << ", data " << std::lround(100 * data_s / std::max(step_s, 1e-9))
           << "% of step time\n";
     if (epoch_end) data_s = step_s = 0;
