@@ -208,6 +208,7 @@ TEST_CASE("train: the mask stage logs its validation mask IoU, and an older log 
   INFO(first.err);
   REQUIRE(first.code == 0);
   CHECK(yelan::test::contains(first.err, "validation mask IoU "));
+  CHECK(yelan::test::contains(first.err, " (at sigmoid > 0.1; 0.3: "));
   auto r = rows();
   REQUIRE(r.size() == 2);
   REQUIRE(r[0].size() == 11);

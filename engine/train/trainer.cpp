@@ -3,6 +3,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <ctime>
@@ -370,7 +371,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   };
   struct ValScore {
     double loss = 0, mpjpe_mm = -1, mask_iou = -1;
+    std::array<double, 2> mask_iou_cut{-1, -1};  // at sigmoid > kOtherCuts: is yelan run's cut well placed?
   };
+  static constexpr std::array<double, 2> kOtherCuts{0.3, 0.5};
   // Mean loss of the net in eval mode over the validation windows, and what a reader
   // understands: for the pose stage MPJPE in mm (paper protocol), for the mask stage the IoU
   // of the current mask, cut where yelan run cuts it, against the true one.
@@ -382,6 +385,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     PoseMetrics metrics;
     int windows = 0;
     double inter = 0, uni = 0;
+    std::array<double, 2> inter_cut{}, uni_cut{};
+    std::array<float, 2> logit_cut{};
+    for (std::size_t k = 0; k < kOtherCuts.size(); ++k) logit_cut[k] = float(std::log(kOtherCuts[k] / (1 - kOtherCuts[k])));
     std::vector<float> keep;
     for (const auto& vb : val_batches) {
       const Batch& b = vb->batch();
@@ -402,11 +408,18 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         const layers::Act& m = mask.masks();
         for (int i = 0; i < m.n; ++i) {
           input::mask_cut(m, i, 0, keep);
-          const float* truth = b.labels.act.data + std::size_t(i) * m.cb() * m.pixels() * 16;
+          const std::size_t at = std::size_t(i) * m.cb() * m.pixels() * 16;
+          const float* truth = b.labels.act.data + at;
+          const float* logit = m.data + at;
           for (std::size_t p = 0; p < keep.size(); ++p) {
             const bool pr = keep[p] > 0, tr = truth[p * 16] > 0.5f;
             inter += pr && tr;
             uni += pr || tr;
+            for (std::size_t k = 0; k < kOtherCuts.size(); ++k) {
+              const bool pk = logit[p * 16] > logit_cut[k];
+              inter_cut[k] += pk && tr;
+              uni_cut[k] += pk || tr;
+            }
           }
         }
       }
@@ -417,7 +430,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     ValScore v;
     v.loss = sum / windows;
     if (pose_stage) v.mpjpe_mm = metrics.scores().mpjpe_mm;
-    else v.mask_iou = uni > 0 ? inter / uni : 1;  // nobody in any window, and no mask: all right
+    if (!pose_stage) {
+      v.mask_iou = uni > 0 ? inter / uni : 1;  // nobody in any window, and no mask: all right
+      for (std::size_t k = 0; k < kOtherCuts.size(); ++k) v.mask_iou_cut[k] = uni_cut[k] > 0 ? inter_cut[k] / uni_cut[k] : 1;
+    }
     return v;
   };
 
@@ -474,10 +490,18 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double sps = spec.batch * cfg.window / dt;
     double val = -1, val_mm = -1, val_iou = -1;
+    std::string iou_text;
     const bool epoch_end = st.step % spec.steps_per_epoch == 0 || st.step == spec.steps;
     if (epoch_end) {
       const ValScore v = validate();
       val = v.loss, val_mm = v.mpjpe_mm, val_iou = v.mask_iou;
+      if (val_iou >= 0) {
+        iou_text = ", validation mask IoU " + std::to_string(val_iou).substr(0, 5) + " (at sigmoid > 0.1; ";
+        for (std::size_t k = 0; k < kOtherCuts.size(); ++k)
+          iou_text += (k ? ", " : "") + std::to_string(kOtherCuts[k]).substr(0, 3) + ": " +
+                      std::to_string(v.mask_iou_cut[k]).substr(0, 5);
+        iou_text += ")";
+      }
       adam.end_epoch();
       if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
       const double crit = pose_stage ? val_mm : val;  // pose: selected by validation MPJPE (mm)
@@ -504,7 +528,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
           << ", validation " << val << " (best " << st.best_val << ")"
           << (val_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(val_mm))) + " mm" : "")
-          << (val_iou >= 0 ? ", validation mask IoU " + std::to_string(val_iou).substr(0, 5) : "") << ", " << sps
+          << iou_text << ", " << sps
           << " samples/s, lr " << adam.lr() << ", data " << std::lround(100 * data_s / std::max(step_s, 1e-9))
           << "% of step time\n";
     if (epoch_end) data_s = step_s = 0;
