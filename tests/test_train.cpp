@@ -158,6 +158,18 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
                           "\"error_split\"", "\"mean_image_px\"", "\"scene\""})
     CHECK(yelan::test::contains(js, key));
   CHECK(yelan::test::contains(ev.out, ", IoU "));  // the mask IoU of each condition beside its MPJPE
+  // A config without stage 1 has no mask IoU to report: n/a, not 0.
+  std::string nomask = micro;
+  nomask.replace(nomask.find("\"convlstm\""), 10, "\"masked_input\": false, \"convlstm\"");
+  std::ofstream(d / "nomask.json") << nomask;
+  REQUIRE(yelan::test::run_cli({"weights", "combine", "--mask", d / "both.h5", "--pose", d / "both.h5", "--config",
+                                d / "nomask.json", "-o", d / "nomask.h5"}).code == 0);
+  const auto evn = yelan::test::run_cli({"eval", "--weights", d / "nomask.h5", "--sim", "test", "--scenes", "1", "--seconds",
+                                         "0.04", "--seed", "3", "--history", "0.1", "--json", d / "evaln.json"});
+  INFO(evn.err);
+  REQUIRE(evn.code == 0);
+  CHECK(yelan::test::contains(evn.out, "mask IoU n/a"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "evaln.json"), "\"mask_iou\": null"));
   // Weights and state from different steps (a stop between the two writes) are refused.
   std::filesystem::copy_file(d / "crop.h5", d / "b/checkpoint.h5", std::filesystem::copy_options::overwrite_existing);
   const auto mixed = run("b", "6", {"--resume"});

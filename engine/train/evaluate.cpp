@@ -176,7 +176,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   }
   res.all = all.scores();
   res.swap_oracle = oracle.scores();
-  res.mask_iou = spec.true_mask ? -1 : uni > 0 ? inter / uni : 0;
+  res.mask_iou = spec.true_mask || !cfg.masked_input ? -1 : uni > 0 ? inter / uni : 0;
   for (const auto& [name, values] : cond)
     for (const auto& [value, m] : values)
       if (m.scores().frames > 0) res.by_condition[name][value] = m.scores();  // empty scenes score no frame
@@ -262,7 +262,7 @@ std::string eval_table(const EvalResult& r) {
     << "MPJPE " << r.all.mpjpe_mm << " mm, PCK@150 " << std::setprecision(3) << r.all.pck150 << ", AUC " << r.all.auc
     << std::setprecision(1) << "; root-aligned: MPJPE " << r.all.mpjpe_root_mm << " mm, PCK@150 " << std::setprecision(3)
     << r.all.pck150_root << ", AUC " << r.all.auc_root << "; mask IoU "
-    << (r.mask_iou >= 0 ? std::to_string(r.mask_iou).substr(0, 5) : std::string("n/a (true masks)")) << "\n";
+    << (r.mask_iou >= 0 ? std::to_string(r.mask_iou).substr(0, 5) : std::string("n/a (true masks, or no stage 1)")) << "\n";
   o << std::setprecision(1) << "per joint (mm):";
   for (int i = 0; i < kJoints; ++i) {
     o << " " << kJointNames[i] << " ";

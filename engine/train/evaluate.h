@@ -33,7 +33,7 @@ struct EvalSpec {
 
 struct EvalResult {
   PoseScores all;
-  double mask_iou = 0;  // -1 with true masks (no stage 1 ran): n/a
+  double mask_iou = 0;  // -1 where no stage 1 ran (true masks, or a config without one): n/a
   // condition name -> value -> scores (lighting, background, view, character, clothing, occlusion)
   std::map<std::string, std::map<std::string, PoseScores>> by_condition;
   // the same conditions' mask IoU (stage 1 against the true mask); empty with true masks
