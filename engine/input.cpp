@@ -37,12 +37,13 @@ void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, i
   }
 }
 
-void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep) {
+void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep, float cut) {
   if (channel < 0 || channel >= logits.c || n < 0 || n >= logits.n) throw std::invalid_argument("mask_cut: no such frame or channel");
-  const float cut = std::log(0.1f / 0.9f);  // sigmoid(logit) > 0.1
+  if (!(cut > 0 && cut < 1)) throw std::invalid_argument("mask_cut: the cut must lie in (0, 1)");
+  const float logit_cut = std::log(cut / (1 - cut));
   keep.resize(logits.pixels());
   const float* p = logits.data + (std::size_t(n) * logits.cb() + channel / 16) * logits.pixels() * 16 + channel % 16;
-  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > cut ? 1.f : 0.f;
+  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > logit_cut ? 1.f : 0.f;
 }
 
 void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep) {

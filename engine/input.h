@@ -14,9 +14,12 @@ namespace yelan::input {
 // n of a blocked activation of the model's input size.
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n);
 
-// The binarised mask of channel `channel` of frame n of the mask net's logits (sigmoid > 0.1),
+// Where yelan run binarises a mask (sigmoid above it: the dancer).
+inline constexpr float kMaskCut = 0.1f;
+
+// The binarised mask of channel `channel` of frame n of the mask net's logits (sigmoid > cut),
 // one value (0 or 1) per input pixel.
-void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep);
+void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep, float cut = kMaskCut);
 
 // Frame n of `a` multiplied, every channel, by one value per pixel.
 void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep);

@@ -370,10 +370,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
           << " recordings\n";
   };
   struct ValScore {
-    double loss = 0, mpjpe_mm = -1, mask_iou = -1;
-    std::array<double, 2> mask_iou_cut{-1, -1};  // at sigmoid > kOtherCuts: is yelan run's cut well placed?
+    double loss = 0, mpjpe_mm = -1;
+    std::array<double, 3> mask_iou{-1, -1, -1};  // at sigmoid > kCuts: is yelan run's cut (the first) well placed?
   };
-  static constexpr std::array<double, 2> kOtherCuts{0.3, 0.5};
+  static constexpr std::array<float, 3> kCuts{input::kMaskCut, 0.3f, 0.5f};
   // Mean loss of the net in eval mode over the validation windows, and what a reader
   // understands: for the pose stage MPJPE in mm (paper protocol), for the mask stage the IoU
   // of the current mask, cut where yelan run cuts it, against the true one.
@@ -384,10 +384,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     double sum = 0;
     PoseMetrics metrics;
     int windows = 0;
-    double inter = 0, uni = 0;
-    std::array<double, 2> inter_cut{}, uni_cut{};
-    std::array<float, 2> logit_cut{};
-    for (std::size_t k = 0; k < kOtherCuts.size(); ++k) logit_cut[k] = float(std::log(kOtherCuts[k] / (1 - kOtherCuts[k])));
+    std::array<double, 3> inter{}, uni{};
     std::vector<float> keep;
     for (const auto& vb : val_batches) {
       const Batch& b = vb->batch();
@@ -407,18 +404,13 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         sum += mask_loss(mask, b.labels.act, {dm.data(), mask.masks().n, mask.masks().c, mask.masks().h, mask.masks().w}, ds).total * nw;
         const layers::Act& m = mask.masks();
         for (int i = 0; i < m.n; ++i) {
-          input::mask_cut(m, i, 0, keep);
-          const std::size_t at = std::size_t(i) * m.cb() * m.pixels() * 16;
-          const float* truth = b.labels.act.data + at;
-          const float* logit = m.data + at;
-          for (std::size_t p = 0; p < keep.size(); ++p) {
-            const bool pr = keep[p] > 0, tr = truth[p * 16] > 0.5f;
-            inter += pr && tr;
-            uni += pr || tr;
-            for (std::size_t k = 0; k < kOtherCuts.size(); ++k) {
-              const bool pk = logit[p * 16] > logit_cut[k];
-              inter_cut[k] += pk && tr;
-              uni_cut[k] += pk || tr;
+          const float* truth = b.labels.act.data + std::size_t(i) * m.cb() * m.pixels() * 16;
+          for (std::size_t k = 0; k < kCuts.size(); ++k) {
+            input::mask_cut(m, i, 0, keep, kCuts[k]);
+            for (std::size_t p = 0; p < keep.size(); ++p) {
+              const bool pr = keep[p] > 0, tr = truth[p * 16] > 0.5f;
+              inter[k] += pr && tr;
+              uni[k] += pr || tr;
             }
           }
         }
@@ -430,10 +422,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     ValScore v;
     v.loss = sum / windows;
     if (pose_stage) v.mpjpe_mm = metrics.scores().mpjpe_mm;
-    if (!pose_stage) {
-      v.mask_iou = uni > 0 ? inter / uni : 1;  // nobody in any window, and no mask: all right
-      for (std::size_t k = 0; k < kOtherCuts.size(); ++k) v.mask_iou_cut[k] = uni_cut[k] > 0 ? inter_cut[k] / uni_cut[k] : 1;
-    }
+    if (!pose_stage)  // nobody in any window, and no mask: all right
+      for (std::size_t k = 0; k < kCuts.size(); ++k) v.mask_iou[k] = uni[k] > 0 ? inter[k] / uni[k] : 1;
     return v;
   };
 
@@ -494,12 +484,13 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     const bool epoch_end = st.step % spec.steps_per_epoch == 0 || st.step == spec.steps;
     if (epoch_end) {
       const ValScore v = validate();
-      val = v.loss, val_mm = v.mpjpe_mm, val_iou = v.mask_iou;
+      val = v.loss, val_mm = v.mpjpe_mm, val_iou = v.mask_iou[0];
       if (val_iou >= 0) {
-        iou_text = ", validation mask IoU " + std::to_string(val_iou).substr(0, 5) + " (at sigmoid > 0.1; ";
-        for (std::size_t k = 0; k < kOtherCuts.size(); ++k)
-          iou_text += (k ? ", " : "") + std::to_string(kOtherCuts[k]).substr(0, 3) + ": " +
-                      std::to_string(v.mask_iou_cut[k]).substr(0, 5);
+        iou_text = ", validation mask IoU " + std::to_string(val_iou).substr(0, 5) + " (at sigmoid > " +
+                   std::to_string(kCuts[0]).substr(0, 3) + "; ";
+        for (std::size_t k = 1; k < kCuts.size(); ++k)
+          iou_text += (k > 1 ? ", " : "") + std::to_string(kCuts[k]).substr(0, 3) + ": " +
+                      std::to_string(v.mask_iou[k]).substr(0, 5);
         iou_text += ")";
       }
       adam.end_epoch();
