@@ -83,6 +83,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.bidirectional = mode == "bidirectional";
   c.convlstm = mode != "none";
   c.masked_input = get_bool_or(p, where + ".pose", "masked_input", true);
+  c.mask_role = m.contains("role") ? get_str(m, where + ".mask", "role") : c.masked_input ? "mask" : "none";
   c.crop_margin = p.contains("crop_margin") ? get_int(p, where + ".pose", "crop_margin") : 0;
   c.representation = i.contains("representation") ? get_str(i, where + ".input", "representation") : "tore";
   if (d.contains("run")) {
@@ -100,6 +101,10 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.downscale >= 1, "input.downscale must be >= 1"},
       {c.window >= 1, "input.window must be >= 1"},
       {c.crop_margin >= 0, "pose.crop_margin must be >= 0"},
+      {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",
+       "mask.role must be mask, presence or none"},
+      {(c.mask_role == "mask") == c.masked_input,
+       "mask.role mask goes with pose.masked_input true, presence and none with false"},
       {c.mask_width > 0 && c.pose_width > 0, "width_mult must be > 0"},
       {c.n_masks >= 1 && c.hidden >= 1 && c.stages >= 1 && c.joints >= 1,
        "n_masks, hidden, stages and joints must be >= 1"},

@@ -20,7 +20,14 @@ struct ModelConfig {
   int hidden = 128, stages = 3, joints = 13;
   bool bidirectional = true;
   bool convlstm = true;       // pose.convlstm "none": the skip block sees the head's features alone
-  bool masked_input = true;   // pose.masked_input false: stage 2 sees the whole input, no stage 1
+  bool masked_input = true;   // pose.masked_input false: stage 2 sees the whole input
+  // mask.role: what stage 1 is for. "mask" (the default with masked_input): stage 2 reads the
+  // masked TORE. "presence" (needs masked_input false): stage 1 still runs, with early exit,
+  // to say whether anyone is there, and stage 2 reads the whole TORE (a mask net's errors
+  // then cost no pose accuracy). "none" (the default without masked_input): no stage 1,
+  // presence 1 on every tick.
+  std::string mask_role = "mask";
+  bool runs_stage1() const { return mask_role != "none"; }
   // pose.crop_margin > 0: at inference, stage 2's ResNet head runs only on the mask's
   // bounding box grown by this many input pixels (PoseNet::forward_cropped); 0: whole frame
   int crop_margin = 0;

@@ -10,6 +10,7 @@
 
 #include "cli_util.h"
 #include "engine/run/pipeline.h"
+#include <nlohmann/json.hpp>
 
 namespace {
 using yelan::test::contains;
@@ -138,6 +139,66 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
   const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
   CHECK(bad.code == 2);
   CHECK(contains(bad.err, "run.beta must be in 0..2"));
+}
+
+TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 2 reads the whole TORE", "[run][cli]") {
+  // Three configs of the same networks: stage 1 masks stage 2's input (the default), stage 1
+  // decides presence only, no stage 1. The same seed gives the same tensors to all three.
+  yelan::test::CliTempDir d("run-role");
+  std::ifstream micro(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
+  const nlohmann::ordered_json base = nlohmann::ordered_json::parse(micro);
+  auto variant = [&](const std::string& name, bool masked_input, const char* role) {
+    nlohmann::ordered_json c = base;
+    c["name"] = name;
+    c["pose"]["masked_input"] = masked_input;
+    if (role) c["mask"]["role"] = role;
+    c["run"]["presence"] = {{"a", 1.0}, {"b", 0.5}};  // a law that tells stage 1 from none
+    std::ofstream(d / (name + ".json")) << c.dump() << "\n";
+    return run_cli({"weights", "init", "--config", d / (name + ".json"), "--seed", "2", "-o", d / (name + ".h5")});
+  };
+  REQUIRE(variant("none", false, nullptr).code == 0);
+  REQUIRE(variant("presence", false, "presence").code == 0);
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.3s", "-o", d / "r.yelan.h5"}).code == 0);
+  auto poses = [&](const std::string& w, const std::string& beta, const std::string& out) {
+    const auto r = beta.empty() ? run_cli({"run", "--weights", d / (w + ".h5"), d / "r.yelan.h5", "--no-early-exit", "--out", d / out})
+                                : run_cli({"run", "--weights", d / (w + ".h5"), d / "r.yelan.h5", "--beta", beta, "--out", d / out});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    return csv_rows(slurp(d / out));
+  };
+  const auto none = poses("none", "", "n.csv"), pres = poses("presence", "", "p.csv");
+  REQUIRE(none.size() >= 14);
+  REQUIRE(pres.size() == none.size());
+  for (std::size_t i = 1; i < none.size(); ++i) {
+    REQUIRE(pres[i].size() == 45);
+    for (int c = 0; c <= 39; ++c) CHECK(pres[i][std::size_t(c)] == none[i][std::size_t(c)]);  // stage 2 saw the same input
+    CHECK(none[i][41] == "0");  // no stage 1: never ran, presence 1
+    CHECK(none[i][40] == "1.0000");
+    CHECK(pres[i][41] == "1");  // stage 1 ran on every tick
+    const double share = std::stod(pres[i][44]);
+    CHECK(share > 0);
+    CHECK(std::stod(pres[i][40]) == Approx(yelan::run::presence_probability(share, 1.0, 0.5)).margin(1e-4));
+    CHECK(std::stod(pres[i][40]) < 0.7);
+  }
+  // Early exit still works for presence: beta 0 runs stage 1 once per n_masks (3) ticks.
+  const auto early = poses("presence", "0", "e.csv");
+  int ran = 0;
+  for (std::size_t i = 1; i < early.size(); ++i) ran += early[i][41] == "1";
+  CHECK(ran == int((early.size() - 1 + 2) / 3));
+  // A mask net trained with a masked config fits a presence config (mask.role shapes no tensor).
+  REQUIRE(variant("masked", true, nullptr).code == 0);
+  const auto comb = run_cli({"weights", "combine", "--mask", d / "masked.h5", "--pose", d / "none.h5", "--config",
+                             d / "presence.json", "-o", d / "c.h5"});
+  INFO(comb.err);
+  CHECK(comb.code == 0);
+  CHECK(poses("c", "", "c.csv") == pres);
+  // The role and masked_input must agree; an unknown role is refused, naming the key.
+  const auto wrong = variant("wrong", true, "presence");
+  CHECK(wrong.code == 2);
+  CHECK(contains(wrong.err, "mask.role mask goes with pose.masked_input true"));
+  const auto bogus = variant("bogus", false, "crop");
+  CHECK(bogus.code == 2);
+  CHECK(contains(bogus.err, "mask.role must be mask, presence or none"));
 }
 
 #include "engine/run/viz.h"

@@ -206,8 +206,14 @@ int combine(const Args& a, std::ostream& out) {
   check_output("-o", *o, {*m, *p, a.value_or("--config", "")});
   const weights::Weights wm = weights::load_weights(*m), wp = weights::load_weights(*p);
   const auto cm = weights::parse_json(wm.config_json), cp = weights::parse_json(wp.config_json);
+  // The sections that shape the networks; mask.role says only what stage 1's output is for.
+  const auto shape = [](auto d, const char* key) {
+    auto s = d.contains(key) ? d.at(key) : decltype(d)();
+    if (s.is_object()) s.erase("role");
+    return s;
+  };
   for (const char* key : {"input", "mask"})
-    if (!cm.contains(key) || !cp.contains(key) || cm.at(key) != cp.at(key))
+    if (!cm.contains(key) || !cp.contains(key) || shape(cm, key) != shape(cp, key))
       throw UsageError("weights combine: " + *m + " and " + *p + " differ in the config's '" + key +
                        "' section, so the mask net does not fit the pose net's input");
   weights::Weights w = wp;
@@ -217,7 +223,7 @@ int combine(const Args& a, std::ostream& out) {
     const ModelConfig nc = load_model_config(*c);
     const auto cn = weights::parse_json(nc.json);
     for (const char* key : {"input", "mask"})
-      if (!cn.contains(key) || cn.at(key) != cm.at(key))
+      if (!cn.contains(key) || shape(cn, key) != shape(cm, key))
         throw UsageError("weights combine: --config " + *c + " differs from " + *m + " in the '" + key + "' section");
     w.config_json = nc.json;
     try {

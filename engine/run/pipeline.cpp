@@ -121,7 +121,7 @@ struct PosePipeline::Impl {
   void warm_up() {
     const ModelConfig& cfg = nets.cfg;
     layers::NoGrad no_grad;
-    if (cfg.masked_input) nets.mask.forward(unmasked.act);
+    if (cfg.runs_stage1()) nets.mask.forward(unmasked.act);
     const layers::Act& x = cfg.bidirectional ? window.act : frame.act;
     const int frames = cfg.bidirectional ? cfg.window : 1;
     if (crop > 0) nets.pose.forward_cropped(x, {0, 0, x.w, x.h}, frames);
@@ -167,7 +167,7 @@ struct PosePipeline::Impl {
   void set_presence(Pose& p, float share) const {
     const ModelConfig& cfg = nets.cfg;
     p.mask_share = share;
-    p.confidence = cfg.masked_input ? float(presence_probability(share, cfg.presence_a, cfg.presence_b)) : 1.0f;
+    p.confidence = cfg.runs_stage1() ? float(presence_probability(share, cfg.presence_a, cfg.presence_b)) : 1.0f;
     p.person = p.confidence >= opt.presence_threshold;
   }
 
@@ -216,7 +216,7 @@ struct PosePipeline::Impl {
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
     t0 = Clock::now();
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
-    const bool run_mask = cfg.masked_input && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta);
+    const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta);
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);
@@ -238,7 +238,7 @@ struct PosePipeline::Impl {
     }
     stats.times.stage1_ms.push_back(ms_since(t0));
     if (run_mask) stats.stage1_run_ms.push_back(stats.times.stage1_ms.back());
-    // Masked TORE -> stage 2.
+    // Masked TORE (the whole TORE where stage 1 only decides presence) -> stage 2.
     t0 = Clock::now();
     const layers::Act& dst = cfg.bidirectional ? window.act : frame.act;
     const int n = cfg.bidirectional ? slot : 0;
@@ -249,7 +249,7 @@ struct PosePipeline::Impl {
     last_in = {dst.data + std::size_t(n) * per_frame, 1, dst.c, dst.h, dst.w};
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;
-    slot_share[std::size_t(slot)] = cfg.masked_input ? shares[std::size_t(use)] : 1.0f;
+    slot_share[std::size_t(slot)] = cfg.runs_stage1() ? shares[std::size_t(use)] : 1.0f;
     const PoseNet::CropBox box = cfg.masked_input ? grown(boxes[std::size_t(use)]) : PoseNet::CropBox{};
     int ready = 0;
     if (!cfg.bidirectional) {

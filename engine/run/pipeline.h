@@ -38,7 +38,7 @@ struct RunOptions {
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
 // through the model's calibration (ModelConfig run.presence) to a probability. A model
-// without stage 1 (pose.masked_input false) has no opinion: presence 1 on every tick.
+// without stage 1 (mask.role none) has no opinion: presence 1 on every tick.
 struct Pose {
   std::int64_t t_us = 0;
   std::array<std::array<float, 3>, 13> joints_mm{};  // camera frame; NaN when !person

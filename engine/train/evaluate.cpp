@@ -262,7 +262,7 @@ std::string eval_table(const EvalResult& r) {
     << "MPJPE " << r.all.mpjpe_mm << " mm, PCK@150 " << std::setprecision(3) << r.all.pck150 << ", AUC " << r.all.auc
     << std::setprecision(1) << "; root-aligned: MPJPE " << r.all.mpjpe_root_mm << " mm, PCK@150 " << std::setprecision(3)
     << r.all.pck150_root << ", AUC " << r.all.auc_root << "; mask IoU "
-    << (r.mask_iou >= 0 ? std::to_string(r.mask_iou).substr(0, 5) : std::string("n/a (true masks, or no stage 1)")) << "\n";
+    << (r.mask_iou >= 0 ? std::to_string(r.mask_iou).substr(0, 5) : std::string("n/a (true masks, or stage 2 reads no mask)")) << "\n";
   o << std::setprecision(1) << "per joint (mm):";
   for (int i = 0; i < kJoints; ++i) {
     o << " " << kJointNames[i] << " ";

@@ -36,7 +36,8 @@ class ModelConfig:
     joints: int
     convlstm: str          # bidirectional | causal | none (the skip block sees the head alone)
     raw: dict
-    masked_input: bool = True      # False: stage 2 reads the whole input, no stage 1
+    masked_input: bool = True      # False: stage 2 reads the whole input
+    mask_role: str = "mask"        # mask | presence (stage 1 only says whether anyone is there) | none
     crop_margin: int = 0           # inference only (C++ PoseNet::forward_cropped); 0: whole frame
     representation: str = "tore"   # or "counts": log(1 + events) per polarity per frame period              # the JSON object this was read from
 
@@ -111,6 +112,8 @@ def config_from_dict(d, where="config"):
         masked_input=_get_bool(p, where + ".pose", "masked_input", True),
         crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
         representation=_get(i, where + ".input", "representation", str, "tore"),
+        mask_role=_get(m, where + ".mask", "role", str,
+                       "mask" if _get_bool(p, where + ".pose", "masked_input", True) else "none"),
     )
     # run (optional): how `yelan run` uses the model (beta, presence calibration); checked
     # here as in engine/model_config.cpp, used only by the C++ runtime.
@@ -131,6 +134,9 @@ def config_from_dict(d, where="config"):
         (cfg.downscale >= 1, "input.downscale must be >= 1"),
         (cfg.window >= 1, "input.window must be >= 1"),
         (cfg.crop_margin >= 0, "pose.crop_margin must be >= 0"),
+        (cfg.mask_role in ("mask", "presence", "none"), "mask.role must be mask, presence or none"),
+        ((cfg.mask_role == "mask") == cfg.masked_input,
+         "mask.role mask goes with pose.masked_input true, presence and none with false"),
         (cfg.mask_width > 0 and cfg.pose_width > 0, "width_mult must be > 0"),
         (cfg.n_masks >= 1 and cfg.hidden >= 1 and cfg.stages >= 1 and cfg.joints >= 1,
          "n_masks, hidden, stages and joints must be >= 1"),

@@ -117,6 +117,16 @@ class ParameterCounts(unittest.TestCase):
         sd = ref.PoseNet(small).state_dict()
         self.assertEqual(tuple(sd["cl.fuse_list.0.weight"].shape), (32, 32, 1, 1))
 
+    def test_mask_role_defaults_and_checks_as_the_cpp_reader(self):
+        from weights_tools.reference.config import ConfigError
+        self.assertEqual(_cfg().mask_role, "mask")
+        self.assertEqual(_cfg(**{"pose.masked_input": False}).mask_role, "none")
+        self.assertEqual(_cfg(**{"pose.masked_input": False, "mask.role": "presence"}).mask_role, "presence")
+        with self.assertRaisesRegex(ConfigError, "mask.role mask goes with pose.masked_input true"):
+            _cfg(**{"mask.role": "presence"})
+        with self.assertRaisesRegex(ConfigError, "mask.role must be mask, presence or none"):
+            _cfg(**{"pose.masked_input": False, "mask.role": "crop"})
+
     def test_stored_manifests_are_up_to_date(self):
         mm = _tools()[6]
         self.assertEqual(mm.main(["--check"]), 0, "run weights_tools/make_manifest.py")
