@@ -10,7 +10,9 @@
 #include <fstream>
 #include <functional>
 
+#include "camera/io/format_error.h"
 #include "camera/io/h5.h"
+#include "camera/sim/recording_reader.h"
 #include "cli_util.h"
 
 namespace fs = std::filesystem;
@@ -179,4 +181,20 @@ TEST_CASE("an output that is one of the inputs is refused with exit 2, naming it
   CHECK((slurp(w) == w_bytes));
   CHECK((slurp(cfg) == cfg_bytes));
   CHECK((slurp(scene) == "{}"));
+}
+
+// A 24 KB file `scripts/fuzz recording` made: masks/t declares integers of 1.9 GB each, and
+// HDF5 sizes its conversion buffer from that before reading one (2 GB, then 10-30 s).
+TEST_CASE("a recording whose dataset declares 2 GB integers is refused before HDF5 allocates for them", "[cli]") {
+  const std::string f = std::string(YELAN_SOURCE_DIR) + "/tests/data/fuzz-2gb-integer.yelan.h5";
+  try {
+    yelan::camera::sim::read_recording_info(f);
+    FAIL("read_recording_info accepted " << f);
+  } catch (const yelan::camera::FormatError& e) {
+    CHECK(contains(e.what(), "masks/t is not a dataset of numbers of at most 8 bytes"));
+    CHECK(contains(e.what(), f));
+  }
+  const auto r = run_cli({"eval", "--weights", kModel, "--data", f, "--no-floors"});
+  CHECK(r.code == 2);
+  CHECK(contains(r.err, f));
 }

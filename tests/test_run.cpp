@@ -329,6 +329,22 @@ TEST_CASE("run: streaming evaluation counts ticks, follows beta, and the paper p
   const auto fixed = yelan::run::evaluate_stream(d / "w.h5", scenes, o);
   CHECK(fixed.paper.mpjpe_mm == Approx(every.paper.mpjpe_mm).epsilon(1e-4));
   CHECK(fixed.deployed.mpjpe_mm != Approx(every.deployed.mpjpe_mm).epsilon(1e-3));
+  CHECK(every.person_missed == 0);
+  CHECK(every.person_found == every.poses_scored);
+  // A model whose presence says nobody on every tick writes no joints: its poses are
+  // counted as missed verdicts, never scored as NaN.
+  std::ifstream micro(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
+  std::stringstream ss;
+  ss << micro.rdbuf();
+  const std::string cfg = ss.str();
+  std::ofstream(d / "nobody.json") << cfg.substr(0, cfg.rfind('}')) << ", \"run\": {\"presence\": {\"a\": 0, \"b\": -30}}}\n";
+  REQUIRE(run_cli({"weights", "init", "--config", d / "nobody.json", "--seed", "2", "-o", d / "nobody.h5"}).code == 0);
+  const auto nobody = yelan::run::evaluate_stream(d / "nobody.h5", scenes, o);
+  CHECK(nobody.poses_scored == 0);
+  CHECK(nobody.person_found == 0);
+  CHECK(nobody.person_missed == every.poses_scored);
+  CHECK(nobody.paper.frames == 0);
+  CHECK_FALSE(std::isnan(nobody.paper.mpjpe_mm));
 }
 
 TEST_CASE("run: a flood of noise events and an empty stream keep the pipeline running", "[run]") {

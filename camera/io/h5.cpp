@@ -104,6 +104,14 @@ std::uint64_t chunk_bytes(hid_t dataset) {
   return bytes > 1e18L ? UINT64_MAX : static_cast<std::uint64_t>(bytes);
 }
 
+void require_numeric(hid_t dataset, const std::string& name) {
+  H5Id type = check(H5Dget_type(dataset), "type of " + name);
+  const H5T_class_t cls = H5Tget_class(type.get());
+  const std::size_t bytes = H5Tget_size(type.get());
+  if ((cls != H5T_INTEGER && cls != H5T_FLOAT) || bytes == 0 || bytes > 8)
+    throw H5Failure(name + " is not a dataset of numbers of at most 8 bytes (" + std::to_string(bytes) + "-byte elements)");
+}
+
 void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t file_size,
                          std::uint64_t max_bytes) {
   H5Id dcpl = check(H5Dget_create_plist(dataset), "dataset properties");
@@ -204,7 +212,7 @@ std::optional<std::int64_t> read_attr_i64(hid_t loc, const std::string& name) {
   H5Id attr = check(H5Aopen(loc, name.c_str(), H5P_DEFAULT), "attribute " + name);
   H5Id type = check(H5Aget_type(attr.get()), "attribute type");
   const H5T_class_t cls = H5Tget_class(type.get());
-  if (cls != H5T_INTEGER && cls != H5T_FLOAT) return std::nullopt;
+  if ((cls != H5T_INTEGER && cls != H5T_FLOAT) || H5Tget_size(type.get()) > 8) return std::nullopt;
   H5Id space = check(H5Aget_space(attr.get()), "attribute space");
   if (H5Sget_simple_extent_npoints(space.get()) != 1) return std::nullopt;
   std::int64_t v = 0;
@@ -215,6 +223,7 @@ std::optional<std::int64_t> read_attr_i64(hid_t loc, const std::string& name) {
 std::optional<std::int64_t> read_scalar_i64(hid_t loc, const std::string& name) {
   if (!exists(loc, name)) return std::nullopt;
   H5Id ds = check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), "dataset " + name);
+  require_numeric(ds.get(), name);
   H5Id space = check(H5Dget_space(ds.get()), "dataspace");
   if (H5Sget_simple_extent_npoints(space.get()) != 1) return std::nullopt;
   std::int64_t v = 0;

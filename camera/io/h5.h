@@ -67,6 +67,11 @@ std::uint64_t chunk_bytes(hid_t dataset);
 void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t file_size,
                          std::uint64_t max_bytes);
 
+// Throws H5Failure unless the dataset holds integers or floats of at most 8 bytes: a corrupt
+// file can declare an integer of 2 GB per element, and HDF5 allocates its conversion buffer
+// from that size before reading one element.
+void require_numeric(hid_t dataset, const std::string& name);
+
 // Dataset shape (empty for a scalar).
 std::vector<hsize_t> shape(hid_t dataset);
 // Reads rows [first, first+n) of a 1-D dataset (or a column `col` of a 2-D one) as `mem_type`.

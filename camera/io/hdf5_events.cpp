@@ -173,7 +173,8 @@ class Hdf5Reader final : public EventReader {
       check_chunks(ds.get(), name);
       H5Id type = h5::check(H5Dget_type(ds.get()), "type of " + name);
       const H5T_class_t cls = H5Tget_class(type.get());
-      if (cls != H5T_INTEGER) throw FormatError(path_, 0, "/" + name + " is not an integer dataset");
+      if (cls != H5T_INTEGER || H5Tget_size(type.get()) > 8)
+        throw FormatError(path_, 0, "/" + name + " is not a dataset of integers of at most 8 bytes");
       const auto dims = h5::shape(ds.get());
       if (dims.size() != 1) throw FormatError(path_, 0, "/" + name + " is not one-dimensional");
       if (k == 0) rows_ = dims[0];
@@ -188,7 +189,8 @@ class Hdf5Reader final : public EventReader {
     ms_to_idx_ = h5::check(H5Dopen2(file_.get(), name.c_str(), H5P_DEFAULT), "dataset " + name);
     check_chunks(ms_to_idx_.get(), name);
     const auto dims = h5::shape(ms_to_idx_.get());
-    if (dims.size() != 1) {
+    H5Id type = h5::check(H5Dget_type(ms_to_idx_.get()), "type of " + name);
+    if (dims.size() != 1 || H5Tget_class(type.get()) != H5T_INTEGER || H5Tget_size(type.get()) > 8) {
       ms_to_idx_.reset();
       return;
     }

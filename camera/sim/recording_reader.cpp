@@ -27,6 +27,7 @@ std::vector<T> read_all(hid_t f, const std::string& path, const std::string& nam
                         const std::vector<hsize_t>& row) {
   if (!h5::exists(f, name)) fail(path, "no dataset " + name + " (not a labelled recording from `yelan sim`)");
   h5::H5Id ds = h5::check(H5Dopen2(f, name.c_str(), H5P_DEFAULT), "open " + name);
+  h5::require_numeric(ds.get(), name);
   const std::vector<hsize_t> dims = h5::shape(ds.get());
   if (dims.size() != row.size() + 1 || !std::equal(row.begin(), row.end(), dims.begin() + 1))
     fail(path, name + " has the wrong shape");
@@ -44,6 +45,7 @@ void read_whole_recording(const std::string& path) {
   const h5::H5Id f = h5::open_file(path);
   const RecordingInfo info = read_recording_info(f.get(), path);
   h5::H5Id masks = h5::check(H5Dopen2(f.get(), "masks/data", H5P_DEFAULT), "open masks/data");
+  h5::require_numeric(masks.get(), "masks/data");
   const auto dims = h5::shape(masks.get());
   if (dims.size() != 3 || dims[1] != hsize_t(info.camera.height) || dims[2] != hsize_t(info.camera.width)) return;
   std::vector<std::uint8_t> one(std::size_t(dims[1]) * dims[2]);
@@ -127,6 +129,7 @@ std::vector<std::uint8_t> read_recording_masks(const std::string& path, std::siz
   const h5::H5Id file = open_recording(path);
   try {
     h5::H5Id masks = h5::check(H5Dopen2(file.get(), "masks/data", H5P_DEFAULT), "open masks/data");
+    h5::require_numeric(masks.get(), "masks/data");
     const auto dims = h5::shape(masks.get());
     if (dims.size() != 3) fail(path, "masks/data is not masks x height x width");
     if (first >= dims[0]) return {};

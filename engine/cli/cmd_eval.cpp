@@ -41,11 +41,17 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     << " mm, PCK@150 " << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1)
     << "; with the true head depth: MPJPE " << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm
     << " mm; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks\n";
+  const std::uint64_t shown = r.person_found + r.person_missed;
+  t << "presence: a person reported on " << std::setprecision(1) << (shown ? 100.0 * double(r.person_found) / double(shown) : 0.0)
+    << "% of the " << shown << " poses whose frame shows the dancer (" << r.person_missed
+    << " said no person: not scored)\n";
   out << t.str();
   if (const auto j = a.value("--json"))
     camera::write_file_atomically(*j, "{\"deployed\": " + train::pose_scores_json(r.deployed) + ", \"paper\": " +
                              train::pose_scores_json(r.paper) + ", \"scenes\": " + std::to_string(scenes.size()) +
-                             ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) + "}\n");
+                             ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
+                             ", \"person_found\": " + std::to_string(r.person_found) +
+                             ", \"person_missed\": " + std::to_string(r.person_missed) + "}\n");
   return kOk;
 }
 

@@ -1,5 +1,6 @@
 #include "engine/run/stream_eval.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -59,6 +60,12 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
       const double t = double(p.t_us) * 1e-6;
       if (t < sc.warmup_s || t > end_s) continue;
       const sim::Label l = simulator.label_at(t);
+      const bool dancer_seen = std::any_of(l.valid.begin(), l.valid.end(), [](auto v) { return bool(v); });
+      if (!p.person) {
+        r.person_missed += dancer_seen;
+        continue;  // no joints: scored as a miss, not as NaN
+      }
+      r.person_found += dancer_seen;
       train::Pose13 truth, as_run, rescaled;
       std::array<std::uint8_t, train::kJoints> valid{};
       const double z_true = l.joints_mm[0].z();
