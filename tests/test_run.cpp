@@ -8,9 +8,10 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "cli_util.h"
 #include "engine/run/pipeline.h"
-#include <nlohmann/json.hpp>
 
 namespace {
 using yelan::test::contains;

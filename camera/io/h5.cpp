@@ -104,12 +104,15 @@ std::uint64_t chunk_bytes(hid_t dataset) {
   return bytes > 1e18L ? UINT64_MAX : static_cast<std::uint64_t>(bytes);
 }
 
-void require_numeric(hid_t dataset, const std::string& name) {
-  H5Id type = check(H5Dget_type(dataset), "type of " + name);
+bool holds_small_numbers(hid_t dataset, bool integers_only) {
+  H5Id type = check(H5Dget_type(dataset), "dataset type");
   const H5T_class_t cls = H5Tget_class(type.get());
   const std::size_t bytes = H5Tget_size(type.get());
-  if ((cls != H5T_INTEGER && cls != H5T_FLOAT) || bytes == 0 || bytes > 8)
-    throw H5Failure(name + " is not a dataset of numbers of at most 8 bytes (" + std::to_string(bytes) + "-byte elements)");
+  return (cls == H5T_INTEGER || (!integers_only && cls == H5T_FLOAT)) && bytes > 0 && bytes <= 8;
+}
+
+void require_numeric(hid_t dataset, const std::string& name) {
+  if (!holds_small_numbers(dataset)) throw H5Failure(name + " is not a dataset of numbers of at most 8 bytes");
 }
 
 void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t file_size,

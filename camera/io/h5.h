@@ -67,9 +67,11 @@ std::uint64_t chunk_bytes(hid_t dataset);
 void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t file_size,
                          std::uint64_t max_bytes);
 
-// Throws H5Failure unless the dataset holds integers or floats of at most 8 bytes: a corrupt
-// file can declare an integer of 2 GB per element, and HDF5 allocates its conversion buffer
-// from that size before reading one element.
+// Whether the dataset holds integers (or, unless integers_only, floats) of at most 8 bytes:
+// a corrupt file can declare an integer of 2 GB per element, and HDF5 allocates its
+// conversion buffer from that size before reading one element.
+bool holds_small_numbers(hid_t dataset, bool integers_only = false);
+// Throws H5Failure naming the dataset unless holds_small_numbers(dataset).
 void require_numeric(hid_t dataset, const std::string& name);
 
 // Dataset shape (empty for a scalar).

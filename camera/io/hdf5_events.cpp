@@ -171,9 +171,7 @@ class Hdf5Reader final : public EventReader {
       auto& ds = columns_[static_cast<std::size_t>(k)];
       ds = h5::check(H5Dopen2(file_.get(), name.c_str(), H5P_DEFAULT), "dataset " + name);
       check_chunks(ds.get(), name);
-      H5Id type = h5::check(H5Dget_type(ds.get()), "type of " + name);
-      const H5T_class_t cls = H5Tget_class(type.get());
-      if (cls != H5T_INTEGER || H5Tget_size(type.get()) > 8)
+      if (!h5::holds_small_numbers(ds.get(), true))
         throw FormatError(path_, 0, "/" + name + " is not a dataset of integers of at most 8 bytes");
       const auto dims = h5::shape(ds.get());
       if (dims.size() != 1) throw FormatError(path_, 0, "/" + name + " is not one-dimensional");
@@ -189,8 +187,7 @@ class Hdf5Reader final : public EventReader {
     ms_to_idx_ = h5::check(H5Dopen2(file_.get(), name.c_str(), H5P_DEFAULT), "dataset " + name);
     check_chunks(ms_to_idx_.get(), name);
     const auto dims = h5::shape(ms_to_idx_.get());
-    H5Id type = h5::check(H5Dget_type(ms_to_idx_.get()), "type of " + name);
-    if (dims.size() != 1 || H5Tget_class(type.get()) != H5T_INTEGER || H5Tget_size(type.get()) > 8) {
+    if (dims.size() != 1 || !h5::holds_small_numbers(ms_to_idx_.get(), true)) {
       ms_to_idx_.reset();
       return;
     }
