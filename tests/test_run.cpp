@@ -122,6 +122,7 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
     CHECK(rows[i][39].empty());
     CHECK(std::stod(rows[i][40]) < 1e-6);
     CHECK(rows[i][42] == "0");
+    CHECK(rows[i][41] == "1");  // a stored mask that says nobody is not reused: stage 1 looks again
   }
   REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "n.json"}).code == 0);
   CHECK(contains(slurp(d / "n.json"), "\"joints_mm\": null"));
@@ -413,7 +414,7 @@ TEST_CASE("run: presence calibration recovers a known logistic law and reports i
   std::vector<PresenceSample> s;
   for (int i = 0; i < 20000; ++i) {
     const double share = std::exp(-7 * u(rng));  // 0.0009 .. 1
-    s.push_back({share, u(rng) < presence_probability(share, 2, 6)});
+    s.push_back({share, u(rng) < presence_probability(share, 2, 6), ""});
   }
   // Balanced weighting shifts b by ln(n_neg / n_pos); a is unchanged.
   double pos = 0;
@@ -426,21 +427,42 @@ TEST_CASE("run: presence calibration recovers a known logistic law and reports i
   CHECK(r.expected_calibration_error < 0.03);  // the true law is calibrated
   CHECK(presence_report(s, 2, 20, 0.5).expected_calibration_error > 0.2);  // a shifted one is not
   // Separable data gives finite numbers; one class alone is refused.
-  const PresenceFit sep = fit_presence({{0.0, false}, {0.001, false}, {0.1, true}, {0.3, true}});
+  const PresenceFit sep = fit_presence({{0.0, false, ""}, {0.001, false, ""}, {0.1, true, ""}, {0.3, true, ""}});
   CHECK(std::isfinite(sep.a));
   CHECK(presence_probability(0.2, sep.a, sep.b) > 0.9);
   CHECK(presence_probability(0.0, sep.a, sep.b) < 0.1);
   // Classes that overlap where the mask is empty (a mask net that misses some dancers): the
   // fit stays finite and beats the constant (log 2 balanced), where plain Newton ran away.
   std::vector<PresenceSample> mixed;
-  for (int i = 0; i < 500; ++i) mixed.push_back({i % 2 ? 0.0 : 0.1, true});
-  for (int i = 0; i < 200; ++i) mixed.push_back({i % 10 ? 0.0 : 0.05, false});
+  for (int i = 0; i < 500; ++i) mixed.push_back({i % 2 ? 0.0 : 0.1, true, ""});
+  for (int i = 0; i < 200; ++i) mixed.push_back({i % 10 ? 0.0 : 0.05, false, ""});
   const PresenceFit m = fit_presence(mixed);
   CHECK(std::isfinite(m.a));
   CHECK(std::isfinite(m.b));
   CHECK(std::abs(m.b) < 1e3);
   CHECK(m.log_loss < std::log(2.0) - 0.05);
-  CHECK_THROWS_WITH(fit_presence({{0.1, true}, {0.2, true}}), Catch::Contains("ticks with a person and ticks without"));
+  CHECK_THROWS_WITH(fit_presence({{0.1, true, ""}, {0.2, true, ""}}), Catch::Contains("ticks with a person and ticks without"));
+  // The report splits by the conditions the recordings' names carry (P >= 0.5 where s >= 0.05).
+  const std::vector<PresenceSample> named = {{0.2, true, "val-00001-hana-02_01-front-high-dynamic-occluded"},
+                                             {0.0, true, "val-00002-eli-dance-left-low-static"},
+                                             {0.2, false, "val-empty-00006-left-medium-dynamic-flicker-pan"},
+                                             {0.0, false, "val-empty-00007-back-medium-static-flicker-shake"},
+                                             {0.0, false, "val-empty-00008-back-medium-static-flicker-shake"}};
+  const PresenceReport c = presence_report(named, 1, -std::log(0.051), 0.5);
+  CHECK(c.by_condition.at("dynamic").person_ticks == 1);
+  CHECK(c.by_condition.at("dynamic").person_called == 1);
+  CHECK(c.by_condition.at("dynamic").empty_called == 1);
+  CHECK(c.by_condition.at("static").person_called == 0);
+  CHECK(c.by_condition.at("flicker").empty_ticks == 3);
+  CHECK(c.by_condition.at("flicker").empty_called == 1);
+  CHECK(c.by_condition.at("shake").empty_ticks == 2);
+  CHECK(c.by_condition.at("medium").empty_ticks == 3);
+  CHECK(c.by_condition.count("front") == 0);  // views and clips are not conditions
+  CHECK(c.by_condition.count("hana") == 0);
+  std::ostringstream text;
+  print_presence_report(c, text);
+  CHECK(contains(text.str(), "    flicker   dancer -; empty 33.3% of 3\n"));
+  CHECK(contains(text.str(), "    dynamic   dancer 100.0% of 1; empty 100.0% of 1\n"));
 }
 
 TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings and stores it in the config", "[run][cli]") {

@@ -243,6 +243,52 @@ TEST_CASE("train: the mask stage logs its validation mask IoU, and an older log 
   CHECK(std::stod(r[2][10]) >= 0);
 }
 
+TEST_CASE("train: --mask-frames sets the mask stage's training windows, validation keeps the config's", "[train][cli]") {
+  yelan::test::CliTempDir d("train-mask-frames");
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> v = {"train", "--stage", "mask", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                  "--epoch-steps", "2", "--val-windows", "1", "--batch", "2", "--threads", "1",
+                                  "-o", d / out, "--steps", "2"};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  auto losses = [&](const std::string& out) {
+    std::istringstream in(yelan::test::slurp(d / (out + "/log.csv")));
+    std::string line, all;
+    std::getline(in, line);
+    for (; std::getline(in, line);) {
+      std::vector<std::string> c;
+      std::istringstream l(line);
+      for (std::string x; std::getline(l, x, ',');) c.push_back(x);
+      REQUIRE(c.size() == 11);
+      all += c[2] + " " + c[3] + " " + c[10] + "\n";  // loss, validation loss, IoU
+    }
+    return all;
+  };
+  const auto plain = run("plain", {});
+  REQUIRE(plain.code == 0);
+  // The config's own window (micro: 2) is the run without the flag, value for value.
+  const auto same = run("same", {"--mask-frames", "2"});
+  INFO(same.err);
+  REQUIRE(same.code == 0);
+  CHECK_FALSE(yelan::test::contains(same.err, "training windows of"));
+  CHECK(losses("same") == losses("plain"));
+  const auto one = run("one", {"--mask-frames", "1"});
+  INFO(one.err);
+  REQUIRE(one.code == 0);
+  CHECK(yelan::test::contains(one.err, "training windows of 1 frame (--mask-frames); validation windows of the config's 2"));
+  CHECK(losses("one") != losses("plain"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "one/run.json"), "\"window\": 1,"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "plain/run.json"), "\"window\": 2,"));
+  // The pose net's ConvLSTM needs the config's window.
+  const auto pose = yelan::test::run_cli({"train", "--stage", "pose", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                          "-o", d / "p", "--steps", "1", "--mask-frames", "1"});
+  CHECK(pose.code == 2);
+  CHECK(yelan::test::contains(pose.err, "--mask-frames"));
+  const auto zero = run("zero", {"--mask-frames", "0"});
+  CHECK(zero.code == 2);
+}
+
 TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bit-exactly, and eval --data scores them", "[train][cli]") {
   yelan::test::CliTempDir d("train-data");
   std::filesystem::create_directories(d / "rec");

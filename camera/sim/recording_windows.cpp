@@ -136,9 +136,15 @@ void RecordingWindowStream::fill(Open& r, std::size_t first, bool fresh, SimWind
     SimFrame& f = out.frames[std::size_t(k)];
     const std::size_t m = first + std::size_t(k);
     f.t_us = r.info.mask_t[m];
-    r.feed(f.t_us);
-    f.tore.resize(r.tore.volume_size());
-    r.tore.readout(f.t_us, f.tore.data());
+    // A label-only frame needs no events: the next read-out feeds up to its own time (the
+    // TORE's state after the same events is the same however they were fed).
+    if (opt_.tore_frames > 0 && k >= opt_.tore_frames && r.counts.empty()) {
+      f.tore.clear();
+    } else {
+      r.feed(f.t_us);
+      f.tore.resize(r.tore.volume_size());
+      r.tore.readout(f.t_us, f.tore.data());
+    }
     r.read_mask(m, f.mask);
     if (!r.counts.empty()) {
       f.counts = r.counts;

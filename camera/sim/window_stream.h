@@ -48,6 +48,10 @@ struct WindowStreamOptions {
   bool spread = false;              // recordings, shuffled, one cursor: window k from recording
                                     // k mod n (each in turn, so a small sample covers the split)
   bool counts = false;              // also fill SimFrame::counts (constant-time event frames)
+  // Recordings without counts: only the first tore_frames frames of a window get a TORE
+  // read-out (the rest carry masks and labels alone: the mask net's future-mask targets);
+  // 0: every frame. The read-outs given are the same values either way.
+  int tore_frames = 0;
 };
 
 class SimWindowStream {

@@ -52,7 +52,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   const Args a("train", argv,
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
-                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at"},
+                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames"},
                {"--occlusion", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
@@ -112,6 +112,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.steps = a.int_value_or("--steps", 1000, 1, 1 << 30);
   spec.batch = a.int_value_or("--batch", 8, 1, 1024);
   spec.stop_at = a.int_value_or("--stop-at", 0, 0, 1 << 30);
+  spec.mask_frames = a.int_value_or("--mask-frames", 0, 1, 1 << 10);
+  if (spec.mask_frames && spec.stage != "mask") throw UsageError("--mask-frames: for --stage mask only (the pose net's ConvLSTM needs the config's window)");
   spec.steps_per_epoch = a.int_value_or("--epoch-steps", 50, 1, 1 << 30);
   spec.patience = a.int_value_or("--patience", 10, 1, 1 << 20);
   spec.val_windows = a.int_value_or("--val-windows", data ? 48 : 16, 1, 1 << 20);

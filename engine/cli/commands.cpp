@@ -68,7 +68,7 @@ const std::vector<Command>& commands() {
        "       yelan train --stage mask|pose --config NAME|FILE --data DIR [--val-data DIR] -o OUTDIR\n"
        "                   [--steps 1000] [--batch 8] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
        "                   [--lr-schedule cosine|step] [--warmup-steps N] [--history 5] [--val-windows N]\n"
-       "                   [--stop-at STEP]\n"
+       "                   [--stop-at STEP] [--mask-frames F]\n"
        "                   [--occlusion] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
        "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
        "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
@@ -84,7 +84,10 @@ const std::vector<Command>& commands() {
        "--lr-schedule step: halved every 5 (mask) / 10 (pose) epochs; validation on other\n"
        "recordings each epoch, early stop after --patience 10 epochs. OUTDIR gets log.csv,\n"
        "checkpoint.h5 + checkpoint.state (atomic, every --checkpoint-minutes and at the end),\n"
-       "best.h5 and final.h5; --resume continues from the checkpoint bit-exactly.\n",
+       "best.h5 and final.h5; --resume continues from the checkpoint bit-exactly.\n"
+       "--mask-frames F (mask stage): training windows of F frames instead of the config's S (the\n"
+       "U-Net sees one frame at a time: windows of 1 frame give S times the distinct samples per\n"
+       "step's cost); validation keeps S.\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
@@ -156,7 +159,7 @@ const std::vector<Command>& commands() {
        "       yelan bench events [--json]\n"
        "       yelan bench networks [--configs paper,small,tiny] [--threads-list 1,2] [--window W] [--json]\n"
        "       yelan bench sim [--duration 2] [--threads-list 1,2] [--character ben] [--motion 05_04] [--json]\n"
-       "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta 0.99] [--weights W1,W2]\n"
+       "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta B] [--weights W1,W2]\n"
        "                       [--crop-margin PX] [--no-torch] [--json]\n"
        "       yelan bench early-exit --weights W [--values 0.5,...,0.99,1.01] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
        "       yelan bench rate-sweep --weights W [--values 20,50,100,150,200] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
@@ -175,7 +178,8 @@ const std::vector<Command>& commands() {
        "sim: simulated seconds per wall second for each lighting x background, the shares\n"
        "of rendering and the pixel model, and events/s against the real DAVIS346 recording.\n"
        "run: the streaming pipeline per config and thread count: poses/s, per-tick p50/p99 split\n"
-       "by stage (TORE, stage 1, stage 2) and the share of ticks that ran stage 1.\n"
+       "by stage (TORE, stage 1, stage 2) and the share of ticks that ran stage 1; at each model's\n"
+       "own run.beta (its shipped setting; 0.99 without one) unless --beta is given.\n"
        "early-exit, rate-sweep: the pipeline scored on test-split scenes (simulated once, in memory)\n"
        "while beta or the pose rate varies: MPJPE (paper protocol and with the depth prior), the share\n"
        "of ticks that ran stage 1, ms per tick by stage; --chart writes the SVG (and PNG).\n"

@@ -170,6 +170,9 @@ struct PosePipeline::Impl {
     p.confidence = cfg.runs_stage1() ? float(presence_probability(share, cfg.presence_a, cfg.presence_b)) : 1.0f;
     p.person = p.confidence >= opt.presence_threshold;
   }
+  bool says_person(float share) const {
+    return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b)) >= opt.presence_threshold;
+  }
 
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
     if (b.empty()) return b;
@@ -216,7 +219,11 @@ struct PosePipeline::Impl {
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
     t0 = Clock::now();
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
-    const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta);
+    // A stored mask that says nobody is there is not reused, however sure its score: a net
+    // that saw an empty room is confidently wrong about the next 300 ms once someone walks in
+    // (a dancer was missed on the first 16 ticks of the demo).
+    const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta ||
+                                                !says_person(shares[std::size_t(idx)]));
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);

@@ -63,6 +63,24 @@ PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
   return f;
 }
 
+namespace {
+// The simulator's condition words in a recording's name (yelan sim --dataset names files
+// SPLIT[-empty]-NNNNN-[who-clip-]VIEW-LIGHT-BACKGROUND[-occluded][-flicker][-pan|-shake]).
+std::vector<std::string> conditions_in(const std::string& name) {
+  static const char* const kWords[] = {"low", "medium", "high", "static", "dynamic", "occluded", "flicker", "pan", "shake"};
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= name.size()) {
+    const std::size_t end = std::min(name.find_first_of("-_.", start), name.size());
+    const std::string word = name.substr(start, end - start);
+    for (const char* w : kWords)
+      if (word == w) out.push_back(word);
+    start = end + 1;
+  }
+  return out;
+}
+}  // namespace
+
 PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold) {
   PresenceReport r;
   r.bins.resize(10);
@@ -76,6 +94,11 @@ PresenceReport presence_report(const std::vector<PresenceSample>& samples, doubl
     const double p = presence_probability(s.share, a, b), w = s.person ? w_pos : w_neg;
     const bool called = p >= threshold;
     (s.person ? hits : alarms) += called;
+    for (const std::string& c : conditions_in(s.recording)) {
+      auto& k = r.by_condition[c];
+      (s.person ? k.person_ticks : k.empty_ticks) += 1;
+      (s.person ? k.person_called : k.empty_called) += called;
+    }
     const std::size_t k = std::size_t(std::min(9, int(p * 10)));
     ++r.bins[k].n;
     weight[k] += w;
@@ -106,6 +129,16 @@ void print_presence_report(const PresenceReport& r, std::ostream& out) {
     if (r.bins[i].n)
       out << "    " << std::setprecision(1) << double(i) / 10 << "-" << double(i + 1) / 10 << ": " << r.bins[i].n << ", "
           << std::setprecision(3) << r.bins[i].predicted << ", " << r.bins[i].observed << "\n";
+  if (r.by_condition.empty()) return;
+  out << "  by condition (dancer ticks called person; empty ticks called person):\n";
+  for (const auto& [name, c] : r.by_condition) {
+    out << "    " << std::left << std::setw(9) << name << std::right << std::setprecision(1);
+    if (c.person_ticks) out << " dancer " << 100 * double(c.person_called) / double(c.person_ticks) << "% of " << c.person_ticks;
+    else out << " dancer -";
+    if (c.empty_ticks) out << "; empty " << 100 * double(c.empty_called) / double(c.empty_ticks) << "% of " << c.empty_ticks;
+    else out << "; empty -";
+    out << "\n";
+  }
 }
 
 std::vector<PresenceSample> presence_samples(const std::string& weights, const std::vector<std::string>& recordings,
@@ -122,7 +155,7 @@ std::vector<PresenceSample> presence_samples(const std::string& weights, const s
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
     std::size_t before = out.size();
     const auto keep = [&](const Pose& p) {
-      if (p.t_us >= skip_us) out.push_back({p.mask_share, info.dancer});
+      if (p.t_us >= skip_us) out.push_back({p.mask_share, info.dancer, info.name});
     };
     std::vector<camera::Event> ev;
     while (true) {

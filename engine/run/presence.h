@@ -4,6 +4,7 @@
 // pipeline, and stored in the model's config (run.presence).
 #pragma once
 #include <cstdint>
+#include <map>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@ namespace yelan::run {
 struct PresenceSample {
   double share = 0;    // the mask's share of the frame on this tick
   bool person = false;  // the truth: the recording has a dancer
+  std::string recording;  // its name, whose conditions (lighting, background, pan, ...) the report splits by
 };
 
 struct PresenceFit {
@@ -38,6 +40,12 @@ struct PresenceReport {
   };
   std::vector<Bin> bins;
   double expected_calibration_error = 0;  // tick-weighted mean |predicted - observed|
+  // Per condition named in the recordings' names (low, static, pan, flicker, ...): ticks and
+  // those called person, dancer and empty scenes apart.
+  struct Condition {
+    std::uint64_t person_ticks = 0, person_called = 0, empty_ticks = 0, empty_called = 0;
+  };
+  std::map<std::string, Condition> by_condition;
 };
 
 PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold);

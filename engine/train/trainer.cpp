@@ -219,6 +219,14 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.lr_schedule != "cosine" && spec.lr_schedule != "step")
     throw std::invalid_argument("LR schedule must be cosine or step, got '" + spec.lr_schedule + "'");
   const bool cosine = spec.lr_schedule == "cosine";
+  if (spec.mask_frames < 0 || (pose_stage && spec.mask_frames > 0))
+    throw std::invalid_argument("frames per mask window: the mask stage only, and >= 1");
+  // The training windows' shape; validation, weights and the saved config keep cfg's.
+  ModelConfig tcfg = cfg;
+  if (spec.mask_frames > 0) tcfg.window = spec.mask_frames;
+  if (spec.mask_frames > 0 && spec.mask_frames != cfg.window)
+    err << "training windows of " << spec.mask_frames << " frame" << (spec.mask_frames > 1 ? "s" : "")
+        << " (--mask-frames); validation windows of the config's " << cfg.window << "\n";
   fs::create_directories(spec.out_dir);
   if (pose_stage && cfg.masked_input && spec.mask_weights.empty() && spec.init_weights.empty())
     err << "note: the pose net learns from the simulator's true masks; the mask group of the files written here is "
@@ -243,7 +251,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   {
     // What the run is, for the curves and for anyone repeating it.
     const nlohmann::ordered_json j = {{"stage", spec.stage},           {"config", cfg.name},
-                                      {"window", cfg.window},          {"batch", spec.batch},
+                                      {"window", tcfg.window},         {"batch", spec.batch},
                                       {"steps", spec.steps},           {"steps_per_epoch", spec.steps_per_epoch},
                                       {"lr", spec.adam.lr},            {"lr_schedule", spec.lr_schedule},
                                       {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
@@ -300,7 +308,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   // One window per simulated scene: scene k feeds window k, whatever happened before.
   sim::WindowStreamOptions so;
   so.frame_hz = spec.frame_hz;
-  so.window = cfg.window + (pose_stage ? 0 : cfg.n_masks - 1);  // the mask net learns future masks too
+  so.window = tcfg.window + (pose_stage ? 0 : cfg.n_masks - 1);  // the mask net learns future masks too
   so.warmup_s = 0.1;
   so.scene_s = so.warmup_s + so.window / so.frame_hz + 1e-6;
   so.history_s = spec.history_s;
@@ -312,11 +320,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   }
   so.shuffle = true;
   so.counts = cfg.representation == "counts";
+  so.tore_frames = tcfg.window;  // the mask net's future frames are targets alone
   WindowSource stream(spec.scenes, train_files, spec.seed, so);
   stream.seek(std::uint64_t(st.step) * std::uint64_t(spec.batch));
   std::vector<sim::SimSpec> val_scenes = spec.val_scenes.empty() ? spec.scenes : spec.val_scenes;
   const bool frozen_mask = pose_stage && !spec.mask_weights.empty();
-  BatchBuilder builder(cfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none);
+  BatchBuilder builder(tcfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none);
 
   std::ofstream log(log_path, std::ios::app);
   const std::clock_t cpu_start = std::clock();
@@ -348,6 +357,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     // cursors (8 open recordings, 8 windows per visit) drew all 48 validation windows from at
     // most 8 of the split's recordings, and the best epoch was picked on that narrow sample.
     sim::WindowStreamOptions vso = so;
+    vso.window = cfg.window + (pose_stage ? 0 : cfg.n_masks - 1);
+    vso.tore_frames = cfg.window;
+    vso.scene_s = vso.warmup_s + vso.window / vso.frame_hz + 1e-6;
     vso.cursors = 1;
     vso.windows_per_visit = 1;
     vso.spread = true;
@@ -476,9 +488,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     step_s += dt;
     result.step_s += dt;
-    result.frames += std::int64_t(spec.batch) * cfg.window;
+    result.frames += std::int64_t(spec.batch) * tcfg.window;
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double sps = spec.batch * cfg.window / dt;
+    const double sps = spec.batch * tcfg.window / dt;
     double val = -1, val_mm = -1, val_iou = -1;
     std::string iou_text;
     const bool epoch_end = st.step % spec.steps_per_epoch == 0 || st.step == spec.steps;

@@ -27,6 +27,10 @@ struct TrainSpec {
   std::vector<std::string> data, val_data;
   std::uint64_t seed = 1;
   int batch = 1;                    // windows per step
+  // mask stage: frames per training window (0: the config's window). The U-Net sees one
+  // frame at a time, so a window's 8 frames are 8 near-copies of one sample: windows of 1
+  // frame give 8x the distinct samples per CPU-second. Validation keeps the config's window.
+  int mask_frames = 0;
   std::int64_t steps = 1000;        // the run's length: the LR schedule's horizon
   std::int64_t stop_at = 0;         // > 0: stop after this step with a checkpoint, as an
                                     // interrupted run would (--resume continues the schedule)
