@@ -167,11 +167,11 @@ struct PosePipeline::Impl {
   void set_presence(Pose& p, float share) const {
     const ModelConfig& cfg = nets.cfg;
     p.mask_share = share;
-    p.confidence = cfg.runs_stage1() ? float(presence_probability(share, cfg.presence_a, cfg.presence_b)) : 1.0f;
+    p.confidence = cfg.runs_stage1() ? presence_of(share) : 1.0f;
     p.person = p.confidence >= opt.presence_threshold;
   }
-  bool says_person(float share) const {
-    return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b)) >= opt.presence_threshold;
+  float presence_of(float share) const {
+    return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
   }
 
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
@@ -223,7 +223,7 @@ struct PosePipeline::Impl {
     // that saw an empty room is confidently wrong about the next 300 ms once someone walks in
     // (a dancer was missed on the first 16 ticks of the demo).
     const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta ||
-                                                !says_person(shares[std::size_t(idx)]));
+                                                presence_of(shares[std::size_t(idx)]) < opt.presence_threshold);
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);

@@ -308,9 +308,14 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   // One window per simulated scene: scene k feeds window k, whatever happened before.
   sim::WindowStreamOptions so;
   so.frame_hz = spec.frame_hz;
-  so.window = tcfg.window + (pose_stage ? 0 : cfg.n_masks - 1);  // the mask net learns future masks too
   so.warmup_s = 0.1;
-  so.scene_s = so.warmup_s + so.window / so.frame_hz + 1e-6;
+  // Windows of `frames` read out, plus the mask net's future masks (targets alone).
+  auto set_window = [&](sim::WindowStreamOptions& o, int frames) {
+    o.window = frames + (pose_stage ? 0 : cfg.n_masks - 1);
+    o.tore_frames = frames;
+    o.scene_s = o.warmup_s + o.window / o.frame_hz + 1e-6;
+  };
+  set_window(so, tcfg.window);
   so.history_s = spec.history_s;
   if (spec.history_s * 1e6 >= double(so.tore.tau_us)) {
     // A batch's windows from `batch` recordings at once, 8 windows per visit read in one
@@ -320,7 +325,6 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   }
   so.shuffle = true;
   so.counts = cfg.representation == "counts";
-  so.tore_frames = tcfg.window;  // the mask net's future frames are targets alone
   WindowSource stream(spec.scenes, train_files, spec.seed, so);
   stream.seek(std::uint64_t(st.step) * std::uint64_t(spec.batch));
   std::vector<sim::SimSpec> val_scenes = spec.val_scenes.empty() ? spec.scenes : spec.val_scenes;
@@ -357,9 +361,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     // cursors (8 open recordings, 8 windows per visit) drew all 48 validation windows from at
     // most 8 of the split's recordings, and the best epoch was picked on that narrow sample.
     sim::WindowStreamOptions vso = so;
-    vso.window = cfg.window + (pose_stage ? 0 : cfg.n_masks - 1);
-    vso.tore_frames = cfg.window;
-    vso.scene_s = vso.warmup_s + vso.window / vso.frame_hz + 1e-6;
+    set_window(vso, cfg.window);
     vso.cursors = 1;
     vso.windows_per_visit = 1;
     vso.spread = true;
