@@ -89,6 +89,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   if (d.contains("run")) {
     const json& r = section(d, "run", where);
     if (r.contains("beta")) c.run_beta = get_num(r, where + ".run", "beta");
+    if (r.contains("depth_scale")) c.depth_scale = get_num(r, where + ".run", "depth_scale");
     if (r.contains("presence")) {
       const json& pr = section(r, "presence", where + ".run");
       c.presence_a = get_num(pr, where + ".run.presence", "a");
@@ -112,6 +113,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.representation != "tore" || c.channels % 2 == 0, "input.channels must be even for TORE (2K planes)"},
       {c.representation != "counts" || c.channels == 2, "input.channels must be 2 for counts (one per polarity)"},
       {c.run_beta >= 0 && c.run_beta <= 2, "run.beta must be in 0..2 (above 1: stage 1 on every tick)"},
+      {c.depth_scale > 0 && c.depth_scale <= 1000, "run.depth_scale must be in (0, 1000]"},
       {std::isfinite(c.presence_a) && std::isfinite(c.presence_b) && c.presence_a >= 0,
        "run.presence: a must be finite and >= 0, b finite"},
       {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},

@@ -39,7 +39,11 @@ struct ModelConfig {
   //   run.presence {a, b}: P(person) = sigmoid(a * ln(s + 0.001) + b), s the share of the
   //   frame the mask in use covers (fitted by `yelan calibrate`); absent, a fixed guess that
   //   puts P = 0.5 near s = 1% (presence_calibrated false says so).
+  //   run.depth_scale: the body-height prior's head depth is multiplied by it (fitted by
+  //   `yelan calibrate`: a net's skeletons are shorter than the bodies it saw, soft-argmax
+  //   pulls joints toward the middle, so the prior alone puts the dancer too far away).
   double run_beta = 0.99;
+  double depth_scale = 1;
   double presence_a = 3.0, presence_b = 13.8;
   bool presence_calibrated = false;
   std::string json;  // the source text

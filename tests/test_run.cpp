@@ -11,7 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_util.h"
+#include "camera/sim/presets.h"
 #include "engine/run/pipeline.h"
+#include "engine/run/stream_eval.h"
 
 namespace {
 using yelan::test::contains;
@@ -141,6 +143,29 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
   const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
   CHECK(bad.code == 2);
   CHECK(contains(bad.err, "run.beta must be in 0..2"));
+  for (const char* scale : {"0", "-1", "2000"}) {
+    std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"depth_scale\": " << scale << "}}\n";
+    const auto bad_scale = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
+    CHECK(bad_scale.code == 2);
+    CHECK(contains(bad_scale.err, "run.depth_scale must be in (0, 1000]"));
+  }
+  // run.depth_scale multiplies the deployed depth, so every joint (the same net: same seed).
+  std::ofstream(d / "half.json") << cfg.substr(0, brace) << ", \"run\": {\"beta\": 0.25, \"presence\": {\"a\": 0, \"b\": 30}, "
+                                  << "\"depth_scale\": 0.5}}\n";
+  REQUIRE(run_cli({"weights", "init", "--config", d / "half.json", "--seed", "2", "-o", d / "half.h5"}).code == 0);
+  REQUIRE(run_cli({"run", "--weights", d / "half.h5", d / "r.yelan.h5", "--out", d / "h.csv", "--beta", "0.5"}).code == 0);
+  const auto hrows = csv_rows(slurp(d / "h.csv"));
+  REQUIRE(hrows.size() == arows.size());
+  for (std::size_t i = 1; i < hrows.size(); ++i)
+    for (int c = 1; c <= 39; ++c) CHECK(std::stod(hrows[i][std::size_t(c)]) == Approx(0.5 * std::stod(arows[i][std::size_t(c)])).margin(0.08));
+  // RunOptions::presence_ab overrides the model's calibration (calibrate runs under its fit).
+  yelan::run::RunOptions o;
+  o.presence_ab = std::array<double, 2>{0, 30};
+  std::ostringstream log;
+  const auto scenes = yelan::run::simulate_scenes({yelan::camera::sim::preset_spec("ben-dance3-front-high-static")}, 4, 0.2, 0.1, log);
+  const auto overridden = yelan::run::evaluate_stream(d / "nobody.h5", scenes, o);
+  CHECK(overridden.poses_scored > 0);
+  CHECK(overridden.person_missed == 0);
 }
 
 TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 2 reads the whole TORE", "[run][cli]") {
@@ -302,9 +327,6 @@ TEST_CASE("run: the depth prior scales a unit-depth skeleton to the body height"
 
 #include <random>
 
-#include "camera/sim/presets.h"
-#include "engine/run/stream_eval.h"
-
 TEST_CASE("run: streaming evaluation counts ticks, follows beta, and the paper protocol ignores the depth estimate", "[run]") {
   yelan::test::CliTempDir d("run-stream-eval");
   REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
@@ -442,6 +464,10 @@ TEST_CASE("run: presence calibration recovers a known logistic law and reports i
   CHECK(std::abs(m.b) < 1e3);
   CHECK(m.log_loss < std::log(2.0) - 0.05);
   CHECK_THROWS_WITH(fit_presence({{0.1, true, ""}, {0.2, true, ""}}), Catch::Contains("ticks with a person and ticks without"));
+  CHECK(presence_log_loss(s, 2, 6) < presence_log_loss(s, 2, 20));
+  // The depth scale is the median of truth / estimate; a pair without an estimate is skipped.
+  CHECK(fit_depth_scale({{3000, 2500}, {4000, 5000}, {3600, 3000}, {3000, 0}}) == Approx(1.2));
+  CHECK(fit_depth_scale({}) == 1);
   // The report splits by the conditions the recordings' names carry (P >= 0.5 where s >= 0.05).
   const std::vector<PresenceSample> named = {{0.2, true, "val-00001-hana-02_01-front-high-dynamic-occluded"},
                                              {0.0, true, "val-00002-eli-dance-left-low-static"},
@@ -477,9 +503,30 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   REQUIRE(c.code == 0);
   CHECK(contains(c.out, "before (the uncalibrated default"));
   CHECK(contains(c.out, "fitted: a "));
+  CHECK(contains(c.out, "refitting on its own ticks would move P(person) by "));
   CHECK(contains(c.err, "(empty)"));
+  // The depth scale: fitted on the dancer's poses, the mean depth error no larger after.
+  CHECK(contains(c.out, "run.depth_scale 1 -> "));
+  const auto at = c.out.find("mean |error| ");
+  REQUIRE(at != std::string::npos);
+  double err_before = 0, err_after = 0;
+  REQUIRE(std::sscanf(c.out.c_str() + at, "mean |error| %lf -> %lf mm", &err_before, &err_after) == 2);
+  CHECK(err_after <= err_before);
   const auto info = run_cli({"weights", "inspect", d / "c.h5"});
   CHECK(contains(info.out, "\"presence\""));
+  CHECK(contains(info.out, "\"depth_scale\""));
+  // The deployed path scored on the same recordings: the dancer's poses against its labels,
+  // the empty scene's counted; the fitted scale makes the median depth ratio 1 there.
+  const auto ev = run_cli({"eval", "--run", "--weights", d / "c.h5", "--data", d / "ds/val", "--seconds", "0.4", "--skip", "0.1",
+                           "--json", d / "ev.json"});
+  INFO(ev.err);
+  REQUIRE(ev.code == 0);
+  CHECK(contains(ev.out, "2 recordings"));
+  CHECK(contains(ev.out, "poses of scenes with nobody"));
+  const auto j = nlohmann::json::parse(slurp(d / "ev.json"));
+  CHECK(j.at("empty_poses").get<int>() >= 10);
+  CHECK(j.at("deployed").at("frames").get<int>() >= 5);
+  CHECK(j.at("head_depth_ratio_median").get<double>() == Approx(1).margin(0.1));
   // The tensors are untouched; the output must differ from the input and not be it.
   CHECK(run_cli({"weights", "diff", d / "w.h5", d / "c.h5"}).code == 0);
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "w.h5"}).code == 2);

@@ -120,6 +120,21 @@ RecordingInfo read_recording_info(hid_t f, const std::string& path) {
   return r;
 }
 
+void label_at(const RecordingInfo& info, std::int64_t t_us, Joints13& joints, std::array<std::uint8_t, kJointCount>& valid) {
+  const auto& lt = info.label_t;
+  if (lt.empty()) throw std::invalid_argument(info.path + ": no labels");
+  std::size_t b = std::size_t(std::upper_bound(lt.begin(), lt.end(), t_us) - lt.begin());
+  const std::size_t a = b == 0 ? 0 : b - 1;
+  if (b >= lt.size()) b = lt.size() - 1;
+  const double w = (b == a || lt[b] == lt[a]) ? 0.0 : double(t_us - lt[a]) / double(lt[b] - lt[a]);
+  const double wa = 1 - std::clamp(w, 0.0, 1.0), wb = 1 - wa;
+  for (int k = 0; k < kJointCount; ++k) {
+    for (int d = 0; d < 3; ++d)
+      joints[k][d] = wa * info.joints[(a * kJointCount + k) * 3 + d] + wb * info.joints[(b * kJointCount + k) * 3 + d];
+    valid[k] = info.valid[a * kJointCount + k] && info.valid[b * kJointCount + k];
+  }
+}
+
 RecordingInfo read_recording_info(const std::string& path) {
   const h5::H5Id file = open_recording(path);
   return read_recording_info(file.get(), path);

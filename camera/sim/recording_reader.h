@@ -30,6 +30,10 @@ struct RecordingInfo {
 // the file and what is missing or malformed.
 RecordingInfo read_recording_info(const std::string& path);
 
+// The label at time t: joints linearly interpolated between the labels around t (clamped
+// to the first and last); a joint is valid when both labels say so.
+void label_at(const RecordingInfo& info, std::int64_t t_us, Joints13& joints, std::array<std::uint8_t, kJointCount>& valid);
+
 // Masks first .. first + n - 1 of a recording (height x width bytes each, nonzero: the
 // dancer), clamped to the masks it has. Throws FormatError naming the file.
 std::vector<std::uint8_t> read_recording_masks(const std::string& path, std::size_t first, std::size_t n);

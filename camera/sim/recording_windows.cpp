@@ -80,20 +80,6 @@ struct RecordingWindowStream::Open {
               info.path + ": read mask " + std::to_string(m));
   }
 
-  // Joints linearly interpolated between the labels around t; a joint is valid when both are.
-  void label_at(std::int64_t t, Joints13& j, std::array<std::uint8_t, kJointCount>& valid) const {
-    const auto& lt = info.label_t;
-    std::size_t b = std::size_t(std::upper_bound(lt.begin(), lt.end(), t) - lt.begin());
-    std::size_t a = b == 0 ? 0 : b - 1;
-    if (b >= lt.size()) b = lt.size() - 1;
-    const double w = (b == a || lt[b] == lt[a]) ? 0.0 : double(t - lt[a]) / double(lt[b] - lt[a]);
-    const double wa = 1 - std::clamp(w, 0.0, 1.0), wb = 1 - wa;
-    for (int k = 0; k < kJointCount; ++k) {
-      for (int d = 0; d < 3; ++d)
-        j[k][d] = wa * info.joints[(a * kJointCount + k) * 3 + d] + wb * info.joints[(b * kJointCount + k) * 3 + d];
-      valid[k] = info.valid[a * kJointCount + k] && info.valid[b * kJointCount + k];
-    }
-  }
 };
 
 RecordingWindowStream::RecordingWindowStream(std::vector<std::string> paths, std::uint64_t seed, WindowStreamOptions options)
@@ -152,7 +138,7 @@ void RecordingWindowStream::fill(Open& r, std::size_t first, bool fresh, SimWind
     } else {
       f.counts.clear();
     }
-    r.label_at(f.t_us, f.joints_mm, f.valid);
+    label_at(r.info, f.t_us, f.joints_mm, f.valid);
   }
 }
 

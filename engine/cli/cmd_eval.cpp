@@ -28,37 +28,56 @@ namespace {
 // prior), each pose scored against the label at its time; root-aligned is the figure to
 // compare with eval's root-aligned one.
 int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
-  if (spec.scenes.empty()) throw UsageError("eval --run needs --sim test|PRESETS (simulated scenes with labels)");
-  std::vector<camera::sim::SimSpec> scenes = spec.scenes;
-  for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i, spec.framed);
-  const auto sims = run::simulate_scenes(scenes, spec.seed, spec.seconds_per_scene, std::max(0.1, spec.history_s), err);
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
-  const run::StreamEvalResult r = run::evaluate_stream(spec.weights, sims, o);
+  run::StreamEvalResult r;
+  std::string what;
+  if (!spec.recordings.empty()) {
+    // The first --skip s of a recording (the TORE still filling) are not scored, as calibrate does.
+    r = run::evaluate_recordings(spec.weights, spec.recordings, spec.seconds_per_scene, a.number_or("--skip", 0.5, 0, 3600), o, err);
+    what = std::to_string(spec.recordings.size()) + " recordings";
+  } else {
+    std::vector<camera::sim::SimSpec> scenes = spec.scenes;
+    for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i, spec.framed);
+    const auto sims = run::simulate_scenes(scenes, spec.seed, spec.seconds_per_scene, std::max(0.1, spec.history_s), err);
+    r = run::evaluate_stream(spec.weights, sims, o);
+    what = std::to_string(scenes.size()) + " scenes";
+  }
   std::ostringstream t;
-  t << std::fixed << std::setprecision(1) << "deployed path (yelan run, its own depth), " << scenes.size() << " scenes, "
+  t << std::fixed << std::setprecision(1) << "deployed path (yelan run, its own depth), " << what << ", "
     << r.poses_scored << " poses: MPJPE " << r.deployed.mpjpe_mm << " mm, root-aligned " << r.deployed.mpjpe_root_mm
     << " mm, PCK@150 " << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1)
     << "; with the true head depth: MPJPE " << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm
     << " mm; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks\n";
+  t << std::setprecision(1) << "head depth as deployed: mean |error| " << r.depth_abs_error_mm << " mm, median estimate / truth "
+    << std::setprecision(3) << r.depth_ratio_median << "\n";
   const std::uint64_t shown = r.person_found + r.person_missed;
   t << "presence: a person reported on " << std::setprecision(1) << (shown ? 100.0 * double(r.person_found) / double(shown) : 0.0)
     << "% of the " << shown << " poses whose frame shows the dancer (" << r.person_missed
-    << " said no person: not scored)\n";
+    << " said no person: not scored)";
+  if (r.empty_poses)
+    t << "; on " << 100.0 * double(r.empty_called_person) / double(r.empty_poses) << "% of the " << r.empty_poses
+      << " poses of scenes with nobody";
+  t << "\n";
   out << t.str();
   if (const auto j = a.value("--json"))
     camera::write_file_atomically(*j, "{\"deployed\": " + train::pose_scores_json(r.deployed) + ", \"paper\": " +
-                             train::pose_scores_json(r.paper) + ", \"scenes\": " + std::to_string(scenes.size()) +
+                             train::pose_scores_json(r.paper) + ", \"scenes\": " +
+                             std::to_string(spec.recordings.empty() ? spec.scenes.size() : spec.recordings.size()) +
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
                              ", \"person_found\": " + std::to_string(r.person_found) +
-                             ", \"person_missed\": " + std::to_string(r.person_missed) + "}\n");
+                             ", \"person_missed\": " + std::to_string(r.person_missed) +
+                             ", \"empty_poses\": " + std::to_string(r.empty_poses) +
+                             ", \"empty_called_person\": " + std::to_string(r.empty_called_person) +
+                             ", \"head_depth_abs_error_mm\": " + std::to_string(r.depth_abs_error_mm) +
+                             ", \"head_depth_ratio_median\": " + std::to_string(r.depth_ratio_median) + "}\n");
   return kOk;
 }
 
 }  // namespace
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta"},
+  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip"},
                {"--true-mask", "--no-floors", "--run", "--unframed"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");

@@ -255,19 +255,60 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   const std::vector<std::string> recs = camera::sim::list_recordings(dir);
   err << "calibrating presence on " << recs.size() << " recordings in " << dir << " (" << seconds << " s each, the first "
       << skip << " s left out)\n";
-  const auto samples = run::presence_samples(*w, recs, rate, seconds + skip, skip, err);
   weights::Weights wt = weights::load_weights(*w);
   const ModelConfig before = parse_model_config(wt.config_json, *w);
+  run::RunOptions opt;
+  opt.rate_hz = rate;
+  if (beta) opt.beta = beta_v;
+  std::vector<std::pair<double, double>> depths;
+  auto samples = run::presence_samples(*w, recs, opt, seconds + skip, skip, err, &depths);
   out << "before (" << (before.presence_calibrated ? "its calibration" : "the uncalibrated default") << ", a "
       << before.presence_a << ", b " << before.presence_b << "):\n";
   run::print_presence_report(run::presence_report(samples, before.presence_a, before.presence_b, 0.5), out);
-  const run::PresenceFit fit = run::fit_presence(samples);
-  out << std::defaultfloat << std::setprecision(6) << "fitted: a " << fit.a << ", b " << fit.b << " (balanced log-loss "
-      << fit.log_loss << "):\n";
-  run::print_presence_report(run::presence_report(samples, fit.a, fit.b, 0.5), out);
+  // The look-again rule reads the calibration (a stored mask that says nobody is not reused),
+  // so the ticks run under a fit differ from those it was fitted on: run again under the fit
+  // and refit until P(person) moves by less than 0.02 at every share (at most 3 more runs).
+  // What is stored is the calibration the last run ran under, and its report is that run's.
+  run::PresenceFit fit = run::fit_presence(samples);
+  std::array<double, 2> used = {before.presence_a, before.presence_b};
+  const auto moved = [](const std::array<double, 2>& x, const run::PresenceFit& f) {
+    double most = 0;
+    for (double s = 1e-4; s <= 1; s *= 1.25)
+      most = std::max(most, std::abs(run::presence_probability(s, x[0], x[1]) - run::presence_probability(s, f.a, f.b)));
+    return most;
+  };
+  for (int round = 1; round <= 3 && moved(used, fit) >= 0.02; ++round) {
+    used = {fit.a, fit.b};
+    opt.presence_ab = used;
+    err << std::defaultfloat << std::setprecision(6) << "running again under a " << used[0] << ", b " << used[1] << "\n";
+    depths.clear();
+    samples = run::presence_samples(*w, recs, opt, seconds + skip, skip, err, &depths);
+    fit = run::fit_presence(samples);
+  }
+  out << std::defaultfloat << std::setprecision(6) << "fitted: a " << used[0] << ", b " << used[1] << " (balanced log-loss "
+      << run::presence_log_loss(samples, used[0], used[1]) << "; refitting on its own ticks would move P(person) by "
+      << std::setprecision(2) << moved(used, fit) << " at most):\n";
+  run::print_presence_report(run::presence_report(samples, used[0], used[1], 0.5), out);
   std::ostringstream pj;
-  pj << std::setprecision(9) << "{\"a\": " << fit.a << ", \"b\": " << fit.b << "}";
+  pj << std::setprecision(9) << "{\"a\": " << used[0] << ", \"b\": " << used[1] << "}";
   wt.config_json = with_run_setting(wt.config_json, "presence", pj.str());
+  // The deployed depth: the body-height prior times a scale, fitted on the same poses.
+  if (!depths.empty()) {
+    const double r = run::fit_depth_scale(depths);
+    double before_mm = 0, after_mm = 0;
+    for (const auto& [truth, est] : depths) {
+      before_mm += std::abs(est - truth);
+      after_mm += std::abs(r * est - truth);
+    }
+    const double scale = before.depth_scale * r;
+    out << std::defaultfloat << std::setprecision(4) << "head depth (" << depths.size()
+        << " poses with a dancer): median truth / estimate " << r << "; run.depth_scale " << before.depth_scale << " -> "
+        << scale << std::fixed << std::setprecision(0) << ", mean |error| " << before_mm / double(depths.size()) << " -> "
+        << after_mm / double(depths.size()) << " mm\n";
+    std::ostringstream dj;
+    dj << std::setprecision(9) << scale;
+    wt.config_json = with_run_setting(wt.config_json, "depth_scale", dj.str());
+  }
   std::optional<double> chosen;
   if (beta) chosen = beta_v;
   if (a.flag("--choose-beta")) {
@@ -294,7 +335,8 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
     wt.config_json = with_run_setting(wt.config_json, "beta", bj.str());
   }
   weights::save_weights(*o, wt);
-  out << "wrote " << *o << " (config run.presence" << (chosen ? " and run.beta" : "") << ")\n";
+  out << "wrote " << *o << " (config run.presence" << (depths.empty() ? "" : ", run.depth_scale")
+      << (chosen ? ", run.beta" : "") << ")\n";
   return kOk;
 }
 

@@ -92,7 +92,7 @@ const std::vector<Command>& commands() {
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
        "                  [--true-mask] [--history 5] [--no-floors] [--unframed] [--json OUT] [--threads T]\n"
-       "       yelan eval --run --weights W --sim test [--seed N] [--scenes M] [--seconds 1] [--beta B] [--json OUT]\n"
+       "       yelan eval --run --weights W --sim test|--data DIR [--seed N] [--scenes M] [--seconds 1] [--beta B] [--skip 0.5] [--json OUT]\n"
        "Both networks as deployed on simulated scenes: --sim test draws M scenes of the test\n"
        "split (held-out characters and motions; views, lightings and backgrounds in turn)\n"
        "with seed N, each starting anywhere in its clip after --history s of events, so anyone\n"
@@ -110,7 +110,9 @@ const std::vector<Command>& commands() {
        "(image-plane px and depth mm per joint, model and per-view floor), ....\n"
        "--run scores the deployed path instead: yelan run's pipeline on the same scenes (TORE of\n"
        "every event so far, stage 1 with early exit, depth from the body-height prior), each\n"
-       "pose against the label at its time; JSON: deployed and paper (true head depth) scores.\n",
+       "pose against the label at its time; JSON: deployed and paper (true head depth) scores,\n"
+       "the deployed head depth's error, presence. With --data: each recording from its first\n"
+       "event, its first --skip s (0.5) not scored; empty scenes count the poses saying person.\n",
        cmd_eval, "evaluation (issue 7)"},
       {"convert", "convert an event file between formats",
        "usage: yelan convert IN OUT [--camera N]\n"
@@ -215,6 +217,8 @@ const std::vector<Command>& commands() {
        "empty, fits P(person) = sigmoid(a ln(s + 0.001) + b) on the mask's share s of the frame\n"
        "(both classes weighted equally), prints hit and false-alarm rates and a reliability table\n"
        "before and after, and writes W with the fit in its config (run.presence; --beta: run.beta).\n"
+       "On the same poses it fits run.depth_scale, the factor on the body-height prior's head\n"
+       "depth that makes the median of truth / estimate 1, and prints the mean depth error.\n"
        "--choose-beta: runs the recordings with a dancer once per beta in 0.5..1.01, compares the\n"
        "mask in use at each tick with the true mask, and stores the beta that runs stage 1 least\n"
        "with a mask IoU within --beta-tolerance of the best.\n"

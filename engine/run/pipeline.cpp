@@ -139,7 +139,8 @@ struct PosePipeline::Impl {
         const float* q = &jn[(std::size_t(f) * cfg.joints + j) * 3];
         unit[std::size_t(j)] = train::denormalise_joint({q[0], q[1], q[2]}, k, 1.0);
       }
-      const double z = opt.fixed_depth_mm > 0 ? opt.fixed_depth_mm : head_depth_from_height(unit, opt.body_height_mm);
+      const double z = opt.fixed_depth_mm > 0 ? opt.fixed_depth_mm
+                                              : nets.cfg.depth_scale * head_depth_from_height(unit, opt.body_height_mm);
       Pose p;
       p.t_us = slot_t[std::size_t(f)];
       p.mask_ran = slot_mask_ran[std::size_t(f)];
@@ -171,6 +172,7 @@ struct PosePipeline::Impl {
     p.person = p.confidence >= opt.presence_threshold;
   }
   float presence_of(float share) const {
+    if (opt.presence_ab) return float(presence_probability(share, (*opt.presence_ab)[0], (*opt.presence_ab)[1]));
     return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
   }
 

@@ -34,6 +34,9 @@ struct RunOptions {
   // Ticks at origin + k / rate (e.g. 0: on a recording's mask and label times) instead of
   // one period after the first event.
   std::optional<std::int64_t> tick_origin_us;
+  // P(person)'s {a, b} instead of the model's run.presence (calibrate refits under its fit:
+  // the look-again rule reads the calibration, so the ticks depend on it).
+  std::optional<std::array<double, 2>> presence_ab;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,

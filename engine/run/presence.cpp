@@ -1,6 +1,7 @@
 #include "engine/run/presence.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <stdexcept>
@@ -16,24 +17,37 @@ namespace {
 double feature(double share) { return std::log(std::max(0.0, share) + 0.001); }
 double sigmoid(double z) { return 1 / (1 + std::exp(-z)); }
 
-}  // namespace
-
-PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
+// Both classes' weights (each half), refusing samples of one class alone.
+std::array<double, 2> class_weights(const std::vector<PresenceSample>& samples) {
   double n_pos = 0, n_neg = 0;
   for (const auto& s : samples) (s.person ? n_pos : n_neg) += 1;
   if (n_pos == 0 || n_neg == 0)
     throw std::invalid_argument("presence calibration needs ticks with a person and ticks without (got " +
                                 std::to_string(std::uint64_t(n_pos)) + " and " + std::to_string(std::uint64_t(n_neg)) + ")");
-  const double w_pos = 0.5 / n_pos, w_neg = 0.5 / n_neg, ridge = 1e-4;
-  // The weighted log-loss plus the ridge, computed stably (log1p of exp of the margin).
-  const auto loss = [&](double a, double b) {
-    double l = 0.5 * ridge * a * a;
-    for (const auto& s : samples) {
-      const double z = a * feature(s.share) + b, m = s.person ? z : -z;  // -log sigmoid(m)
-      l += (s.person ? w_pos : w_neg) * (m > 0 ? std::log1p(std::exp(-m)) : -m + std::log1p(std::exp(m)));
-    }
-    return l;
-  };
+  return {0.5 / n_pos, 0.5 / n_neg};
+}
+
+// The weighted log-loss, computed stably (log1p of exp of the margin).
+double balanced_log_loss(const std::vector<PresenceSample>& samples, double a, double b, double w_pos, double w_neg) {
+  double l = 0;
+  for (const auto& s : samples) {
+    const double z = a * feature(s.share) + b, m = s.person ? z : -z;  // -log sigmoid(m)
+    l += (s.person ? w_pos : w_neg) * (m > 0 ? std::log1p(std::exp(-m)) : -m + std::log1p(std::exp(m)));
+  }
+  return l;
+}
+
+}  // namespace
+
+double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b) {
+  const auto w = class_weights(samples);
+  return balanced_log_loss(samples, a, b, w[0], w[1]);
+}
+
+PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
+  const auto [w_pos, w_neg] = class_weights(samples);
+  const double ridge = 1e-4;
+  const auto loss = [&](double a, double b) { return 0.5 * ridge * a * a + balanced_log_loss(samples, a, b, w_pos, w_neg); };
   double a = 1, b = 0, cur = loss(a, b);
   for (int it = 0; it < 200; ++it) {
     double ga = ridge * a, gb = 0, haa = ridge, hab = 0, hbb = 1e-9;
@@ -141,11 +155,21 @@ void print_presence_report(const PresenceReport& r, std::ostream& out) {
   }
 }
 
+double fit_depth_scale(const std::vector<std::pair<double, double>>& head_depths) {
+  std::vector<double> r;
+  for (const auto& [truth, est] : head_depths)
+    if (est > 0 && truth > 0) r.push_back(truth / est);
+  if (r.empty()) return 1;
+  auto mid = r.begin() + std::ptrdiff_t(r.size() / 2);
+  std::nth_element(r.begin(), mid, r.end());
+  return *mid;
+}
+
 std::vector<PresenceSample> presence_samples(const std::string& weights, const std::vector<std::string>& recordings,
-                                             double rate_hz, double seconds, double skip_s, std::ostream& progress) {
+                                             const RunOptions& run, double seconds, double skip_s, std::ostream& progress,
+                                             std::vector<std::pair<double, double>>* head_depths) {
   std::vector<PresenceSample> out;
-  RunOptions opt;
-  opt.rate_hz = rate_hz;
+  RunOptions opt = run;
   opt.tick_origin_us = 0;
   for (std::size_t i = 0; i < recordings.size(); ++i) {
     const camera::sim::RecordingInfo info = camera::sim::read_recording_info(recordings[i]);
@@ -155,7 +179,14 @@ std::vector<PresenceSample> presence_samples(const std::string& weights, const s
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
     std::size_t before = out.size();
     const auto keep = [&](const Pose& p) {
-      if (p.t_us >= skip_us) out.push_back({p.mask_share, info.dancer, info.name});
+      if (p.t_us < skip_us) return;
+      out.push_back({p.mask_share, info.dancer, info.name});
+      if (head_depths && info.dancer && p.head_depth_mm > 0) {
+        camera::sim::Joints13 joints;
+        std::array<std::uint8_t, camera::sim::kJointCount> valid{};
+        camera::sim::label_at(info, p.t_us, joints, valid);
+        if (valid[0] && joints[0].z() > 1) head_depths->push_back({joints[0].z(), p.head_depth_mm});
+      }
     };
     std::vector<camera::Event> ev;
     while (true) {

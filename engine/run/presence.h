@@ -7,7 +7,10 @@
 #include <map>
 #include <ostream>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "engine/run/pipeline.h"
 
 namespace yelan::run {
 
@@ -27,6 +30,8 @@ struct PresenceFit {
 // method with a little ridge so that separable data still gives finite numbers. a is kept
 // >= 0 (more mask never means less person). Throws std::invalid_argument without both classes.
 PresenceFit fit_presence(const std::vector<PresenceSample>& samples);
+// The class-balanced mean negative log-likelihood of P(person) = sigmoid(a ln(s + 0.001) + b).
+double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b);
 
 struct PresenceReport {
   std::uint64_t person_ticks = 0, empty_ticks = 0;
@@ -52,9 +57,16 @@ PresenceReport presence_report(const std::vector<PresenceSample>& samples, doubl
 void print_presence_report(const PresenceReport& r, std::ostream& out);
 
 // Ticks of the recordings (*.yelan.h5, dancer or empty scenes) run through the pipeline as
-// `yelan run` does (ticks at `rate_hz` from time 0, its early exit), at most `seconds` of
-// each; the first `skip_s` (the TORE still filling) are left out.
+// `yelan run` does with options `run` (ticks at run.rate_hz from time 0, its early exit), at
+// most `seconds` of each; the first `skip_s` (the TORE still filling) are left out. head_depths, when given,
+// receives for every pose of a dancer recording whose head is in the picture the pair
+// (true head depth, the pipeline's estimate), in mm.
 std::vector<PresenceSample> presence_samples(const std::string& weights, const std::vector<std::string>& recordings,
-                                             double rate_hz, double seconds, double skip_s, std::ostream& progress);
+                                             const RunOptions& run, double seconds, double skip_s, std::ostream& progress,
+                                             std::vector<std::pair<double, double>>* head_depths = nullptr);
+
+// The factor that, multiplied into a model's depth estimates, makes their median error
+// vanish: the median of truth / estimate (1 without pairs).
+double fit_depth_scale(const std::vector<std::pair<double, double>>& head_depths);
 
 }  // namespace yelan::run

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "camera/io/event_reader.h"
+#include "camera/sim/recording_reader.h"
 #include "camera/sim/rng.h"
 
 namespace yelan::run {
@@ -39,52 +41,50 @@ std::vector<SimulatedScene> simulate_scenes(const std::vector<camera::sim::SimSp
   return out;
 }
 
-StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes, const RunOptions& run) {
-  namespace sim = camera::sim;
-  using Clock = std::chrono::steady_clock;
+namespace {
+
+// Scores poses against labels and sums what the runs cost; shared by simulated scenes and
+// recordings on disk.
+struct StreamScorer {
   StreamEvalResult r;
   train::PoseMetrics paper, deployed;
+  std::vector<double> depth_ratio;  // estimated / true head depth, per scored pose
+  double depth_abs = 0;
   double tick_ms = 0, tore_ms = 0, s1_ms = 0, s2_ms = 0;
-  RunStats crops;  // the crop tallies of every scene, for run::crop_share
-  for (const SimulatedScene& sc : scenes) {
-    const sim::Simulator& simulator = *sc.sim;
-    const double end_s = simulator.duration_s();
-    PosePipeline pipe(weights, simulator.camera().width, simulator.camera().height, run);
-    std::vector<Pose> poses;
-    const auto keep = [&](const Pose& p) { poses.push_back(p); };
-    const auto t0 = Clock::now();
-    pipe.push(sc.events, keep);
-    pipe.finish(std::llround(end_s * 1e6), keep);
-    r.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
-    for (const Pose& p : poses) {
-      const double t = double(p.t_us) * 1e-6;
-      if (t < sc.warmup_s || t > end_s) continue;
-      const sim::Label l = simulator.label_at(t);
-      const bool dancer_seen = std::any_of(l.valid.begin(), l.valid.end(), [](auto v) { return bool(v); });
-      if (!p.person) {
-        r.person_missed += dancer_seen;
-        continue;  // no joints: scored as a miss, not as NaN
-      }
-      r.person_found += dancer_seen;
-      train::Pose13 truth, as_run, rescaled;
-      std::array<std::uint8_t, train::kJoints> valid{};
-      const double z_true = l.joints_mm[0].z();
-      // The paper protocol: the prediction scaled to the true head depth (joints scale
-      // linearly with the depth they were denormalised with).
-      const double k = p.head_depth_mm > 0 && z_true > 1 ? z_true / p.head_depth_mm : 0;
-      for (int j = 0; j < train::kJoints; ++j) {
-        truth[j] = {l.joints_mm[j].x(), l.joints_mm[j].y(), l.joints_mm[j].z()};
-        valid[j] = l.valid[j] && k > 0;
-        for (int c = 0; c < 3; ++c) {
-          as_run[j][c] = p.joints_mm[j][c];
-          rescaled[j][c] = p.joints_mm[j][c] * k;
-        }
-      }
-      paper.add(rescaled, truth, valid);
-      deployed.add(as_run, truth, valid);
-      ++r.poses_scored;
+  RunStats crops;  // the crop tallies of every run, for run::crop_share
+
+  // A pose of a recording with a dancer, against the label at its time.
+  void add(const Pose& p, const camera::sim::Joints13& label, const std::array<std::uint8_t, camera::sim::kJointCount>& label_valid) {
+    const bool dancer_seen = std::any_of(label_valid.begin(), label_valid.end(), [](auto v) { return bool(v); });
+    if (!p.person) {
+      r.person_missed += dancer_seen;
+      return;  // no joints: scored as a miss, not as NaN
     }
-    const RunStats& st = pipe.stats();
+    r.person_found += dancer_seen;
+    train::Pose13 truth, as_run, rescaled;
+    std::array<std::uint8_t, train::kJoints> valid{};
+    const double z_true = label[0].z();
+    // The paper protocol: the prediction scaled to the true head depth (joints scale
+    // linearly with the depth they were denormalised with).
+    const double k = p.head_depth_mm > 0 && z_true > 1 ? z_true / p.head_depth_mm : 0;
+    for (int j = 0; j < train::kJoints; ++j) {
+      truth[j] = {label[j].x(), label[j].y(), label[j].z()};
+      valid[j] = label_valid[j] && k > 0;
+      for (int c = 0; c < 3; ++c) {
+        as_run[j][c] = p.joints_mm[j][c];
+        rescaled[j][c] = p.joints_mm[j][c] * k;
+      }
+    }
+    if (k > 0 && label_valid[0]) {
+      depth_ratio.push_back(p.head_depth_mm / z_true);
+      depth_abs += std::abs(p.head_depth_mm - z_true);
+    }
+    paper.add(rescaled, truth, valid);
+    deployed.add(as_run, truth, valid);
+    ++r.poses_scored;
+  }
+
+  void add_run(const RunStats& st) {
     r.ticks += st.ticks;
     r.mask_runs += st.mask_runs;
     r.stale += st.stale;
@@ -95,16 +95,99 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
     s1_ms += total(st.times.stage1_ms);
     s2_ms += total(st.times.stage2_ms);
   }
-  r.paper = paper.scores();
-  r.deployed = deployed.scores();
-  const double timed = double(std::max<std::uint64_t>(1, r.ticks - r.stale));  // stale ticks run no stage
-  r.mask_run_fraction = double(r.mask_runs) / timed;
-  r.ms_per_tick = tick_ms / timed;
-  r.tore_ms = tore_ms / timed;
-  r.stage1_ms = s1_ms / timed;
-  r.stage2_ms = s2_ms / timed;
-  r.crop_share = crop_share(crops);
-  return r;
+
+  StreamEvalResult result() {
+    r.paper = paper.scores();
+    r.deployed = deployed.scores();
+    const double timed = double(std::max<std::uint64_t>(1, r.ticks - r.stale));  // stale ticks run no stage
+    r.mask_run_fraction = double(r.mask_runs) / timed;
+    r.ms_per_tick = tick_ms / timed;
+    r.tore_ms = tore_ms / timed;
+    r.stage1_ms = s1_ms / timed;
+    r.stage2_ms = s2_ms / timed;
+    r.crop_share = crop_share(crops);
+    if (!depth_ratio.empty()) {
+      auto mid = depth_ratio.begin() + std::ptrdiff_t(depth_ratio.size() / 2);
+      std::nth_element(depth_ratio.begin(), mid, depth_ratio.end());
+      r.depth_ratio_median = *mid;
+      r.depth_abs_error_mm = depth_abs / double(depth_ratio.size());
+    }
+    return r;
+  }
+};
+
+}  // namespace
+
+StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes, const RunOptions& run) {
+  namespace sim = camera::sim;
+  using Clock = std::chrono::steady_clock;
+  StreamScorer sc;
+  for (const SimulatedScene& scene : scenes) {
+    const sim::Simulator& simulator = *scene.sim;
+    const double end_s = simulator.duration_s();
+    PosePipeline pipe(weights, simulator.camera().width, simulator.camera().height, run);
+    std::vector<Pose> poses;
+    const auto keep = [&](const Pose& p) { poses.push_back(p); };
+    const auto t0 = Clock::now();
+    pipe.push(scene.events, keep);
+    pipe.finish(std::llround(end_s * 1e6), keep);
+    sc.r.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
+    for (const Pose& p : poses) {
+      const double t = double(p.t_us) * 1e-6;
+      if (t < scene.warmup_s || t > end_s) continue;
+      const sim::Label l = simulator.label_at(t);
+      sc.add(p, l.joints_mm, l.valid);
+    }
+    sc.add_run(pipe.stats());
+  }
+  return sc.result();
+}
+
+StreamEvalResult evaluate_recordings(const std::string& weights, const std::vector<std::string>& recordings, double seconds,
+                                     double skip_s, const RunOptions& run, std::ostream& progress) {
+  namespace sim = camera::sim;
+  using Clock = std::chrono::steady_clock;
+  StreamScorer sc;
+  RunOptions opt = run;
+  opt.tick_origin_us = 0;
+  for (std::size_t i = 0; i < recordings.size(); ++i) {
+    const sim::RecordingInfo info = sim::read_recording_info(recordings[i]);
+    auto reader = camera::open_event_file(recordings[i]);
+    PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);
+    const std::int64_t end_us = info.first_event_us + std::llround(seconds * 1e6);
+    const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
+    std::vector<Pose> poses;
+    const auto keep = [&](const Pose& p) {
+      if (p.t_us >= skip_us && p.t_us <= end_us) poses.push_back(p);
+    };
+    std::vector<camera::Event> ev;
+    double wall = 0;
+    while (true) {
+      ev.clear();
+      if (reader->read_until(ev, end_us, 1 << 20) == 0) break;
+      const auto t0 = Clock::now();
+      pipe.push(ev, keep);
+      wall += std::chrono::duration<double>(Clock::now() - t0).count();
+    }
+    const auto t0 = Clock::now();
+    pipe.finish(end_us, keep);
+    sc.r.wall_s += wall + std::chrono::duration<double>(Clock::now() - t0).count();
+    sim::Joints13 joints;
+    std::array<std::uint8_t, sim::kJointCount> valid{};
+    for (const Pose& p : poses) {
+      if (!info.dancer) {
+        ++sc.r.empty_poses;
+        sc.r.empty_called_person += p.person;
+        continue;
+      }
+      sim::label_at(info, p.t_us, joints, valid);
+      sc.add(p, joints, valid);
+    }
+    sc.add_run(pipe.stats());
+    progress << "  [" << (i + 1) << "/" << recordings.size() << "] " << info.name << (info.dancer ? "" : " (empty)") << ": "
+             << poses.size() << " poses\n";
+  }
+  return sc.result();
 }
 
 }  // namespace yelan::run

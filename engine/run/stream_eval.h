@@ -40,9 +40,19 @@ struct StreamEvalResult {
   double tore_ms = 0, stage1_ms = 0, stage2_ms = 0;  // mean per tick (stage 1: over every tick)
   double wall_s = 0;               // pipeline time alone
   double crop_share = 1;           // mean share of the frame stage 2's head ran on
+  // The deployed head depth against the true one, over the scored poses (0 when none).
+  double depth_ratio_median = 0, depth_abs_error_mm = 0;
+  // Recordings without a dancer (evaluate_recordings): their poses and those that said person.
+  std::uint64_t empty_poses = 0, empty_called_person = 0;
 };
 
 StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,
                                  const RunOptions& run);
+
+// The same on labelled recordings on disk (*.yelan.h5, dancer and empty scenes): each run
+// through the pipeline from its first event, ticks on the recording's label clock, the
+// poses from skip_s to `seconds` scored (on empty scenes: counted, and those saying person).
+StreamEvalResult evaluate_recordings(const std::string& weights, const std::vector<std::string>& recordings, double seconds,
+                                     double skip_s, const RunOptions& run, std::ostream& progress);
 
 }  // namespace yelan::run
