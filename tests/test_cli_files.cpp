@@ -198,3 +198,16 @@ TEST_CASE("a recording whose dataset declares 2 GB integers is refused before HD
   CHECK(r.code == 2);
   CHECK(contains(r.err, f));
 }
+
+// A 24 KB file `scripts/fuzz recording` made: masks/data declares pictures of about 2^55
+// bytes; the mask reader sized its buffer from them (ASan: out of memory) instead of
+// holding them to the camera's size.
+TEST_CASE("a recording whose masks are not the camera's size is refused before a buffer is sized from them", "[cli]") {
+  const std::string f = std::string(YELAN_SOURCE_DIR) + "/tests/data/fuzz-huge-masks.yelan.h5";
+  try {
+    (void)yelan::camera::sim::read_recording_masks(f, 0, 4);
+    FAIL("read_recording_masks accepted " << f);
+  } catch (const yelan::camera::FormatError& e) {
+    CHECK(contains(e.what(), f));
+  }
+}

@@ -112,7 +112,7 @@ def main():
     ys = [p["mpjpe"] for r in runs for p in r["points"]] + list(floors.values())
     ymax = max(100.0, min(max(ys) if ys else 500, 800) * 1.05)
     ymax = math.ceil(ymax / 50) * 50
-    W, H = 980, 430
+    W, H = 980, 430 + 18 * ((len(runs) - 1) // 2)  # two legend entries a row
     body = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif">',
             f'<rect width="{W}" height="{H}" fill="white"/>',
             f'<text x="{W / 2}" y="22" text-anchor="middle" font-size="15">{a.title}</text>',
@@ -122,8 +122,8 @@ def main():
     body += svg_panel(560, 50, 390, 300, runs, "cpu_h", "CPU-hours", ymax, floors, False, marks)
     for i, r in enumerate(runs):
         c = COLOURS[i % len(COLOURS)]
-        y = 405
-        x = 70 + i * 300
+        y = 405 + 18 * (i // 2)
+        x = 70 + (i % 2) * 450
         body.append(f'<line x1="{x}" x2="{x + 24}" y1="{y - 4}" y2="{y - 4}" stroke="{c}" stroke-width="3"/>')
         body.append(f'<text x="{x + 30}" y="{y}" font-size="12">{r["name"]} ({r["meta"]["config"]})</text>')
     body.append("</svg>")

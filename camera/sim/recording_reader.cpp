@@ -147,6 +147,10 @@ std::vector<std::uint8_t> read_recording_masks(const std::string& path, std::siz
     h5::require_numeric(masks.get(), "masks/data");
     const auto dims = h5::shape(masks.get());
     if (dims.size() != 3) fail(path, "masks/data is not masks x height x width");
+    // The picture size is the camera's: a file declaring larger masks must not size the buffer.
+    const auto w = h5::read_scalar_i64(file.get(), "camera/width"), h = h5::read_scalar_i64(file.get(), "camera/height");
+    if (!w || !h || *w < 1 || *h < 1 || *w > 65536 || *h > 65536 || dims[1] != hsize_t(*h) || dims[2] != hsize_t(*w))
+      fail(path, "masks/data is not masks x camera/height x camera/width");
     if (first >= dims[0]) return {};
     n = std::min<std::size_t>(n, std::size_t(dims[0]) - first);
     std::vector<std::uint8_t> out(n * std::size_t(dims[1]) * dims[2]);
