@@ -31,17 +31,20 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
   run::StreamEvalResult r;
-  std::string what;
+  std::string what;  // "N recordings" or "N scenes"
+  std::size_t count = 0;
   if (!spec.recordings.empty()) {
     // The first --skip s of a recording (the TORE still filling) are not scored, as calibrate does.
     r = run::evaluate_recordings(spec.weights, spec.recordings, spec.seconds_per_scene, a.number_or("--skip", 0.5, 0, 3600), o, err);
-    what = std::to_string(spec.recordings.size()) + " recordings";
+    count = spec.recordings.size();
+    what = std::to_string(count) + " recordings";
   } else {
     std::vector<camera::sim::SimSpec> scenes = spec.scenes;
     for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i, spec.framed);
     const auto sims = run::simulate_scenes(scenes, spec.seed, spec.seconds_per_scene, std::max(0.1, spec.history_s), err);
     r = run::evaluate_stream(spec.weights, sims, o);
-    what = std::to_string(scenes.size()) + " scenes";
+    count = scenes.size();
+    what = std::to_string(count) + " scenes";
   }
   std::ostringstream t;
   t << std::fixed << std::setprecision(1) << "deployed path (yelan run, its own depth), " << what << ", "
@@ -63,7 +66,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   if (const auto j = a.value("--json"))
     camera::write_file_atomically(*j, "{\"deployed\": " + train::pose_scores_json(r.deployed) + ", \"paper\": " +
                              train::pose_scores_json(r.paper) + ", \"scenes\": " +
-                             std::to_string(spec.recordings.empty() ? spec.scenes.size() : spec.recordings.size()) +
+                             std::to_string(count) +
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
                              ", \"person_found\": " + std::to_string(r.person_found) +
                              ", \"person_missed\": " + std::to_string(r.person_missed) +

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "camera/io/event_reader.h"
 #include "camera/sim/recording_windows.h"
 #include "engine/run/pipeline.h"
 
@@ -68,14 +67,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
           }
         ++pt.ticks;
       };
-      auto reader = camera::open_event_file(path);
-      std::vector<camera::Event> ev;
-      while (true) {
-        ev.clear();
-        if (reader->read_until(ev, end, 1 << 20) == 0) break;
-        pipe.push(ev, score);
-      }
-      pipe.finish(end, score);
+      run_file(pipe, path, end, score);
       mask_runs += pipe.stats().mask_runs;
       with_events += pipe.stats().ticks - pipe.stats().stale;
     }

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "camera/io/event_reader.h"
 #include "camera/repr/tore.h"
 #include "camera/sim/motion.h"
 #include "engine/input.h"
@@ -111,6 +112,7 @@ struct PosePipeline::Impl {
     slot_mask_ran.resize(std::size_t(cfg.window));
     slot_share.resize(std::size_t(cfg.window));
     beta = o.beta >= 0 ? o.beta : cfg.run_beta;
+    if (o.presence_ab) nets.cfg.presence_a = (*o.presence_ab)[0], nets.cfg.presence_b = (*o.presence_ab)[1];
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
   }
@@ -172,7 +174,6 @@ struct PosePipeline::Impl {
     p.person = p.confidence >= opt.presence_threshold;
   }
   float presence_of(float share) const {
-    if (opt.presence_ab) return float(presence_probability(share, (*opt.presence_ab)[0], (*opt.presence_ab)[1]));
     return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
   }
 
@@ -358,6 +359,23 @@ const std::vector<float>& PosePipeline::stored_scores() const { return impl_->sc
 int PosePipeline::mask_downscale() const { return impl_->nets.cfg.downscale; }
 double PosePipeline::focal_px() const { return kFocalPx; }
 bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }
+
+double run_file(PosePipeline& pipe, const std::string& path, std::int64_t end_us, const std::function<void(const Pose&)>& out) {
+  using Clock = std::chrono::steady_clock;
+  auto reader = camera::open_event_file(path);
+  std::vector<camera::Event> ev;
+  double seconds = 0;
+  while (true) {
+    ev.clear();
+    if (reader->read_until(ev, end_us, 1 << 20) == 0) break;
+    const auto t0 = Clock::now();
+    pipe.push(ev, out);
+    seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+  }
+  const auto t0 = Clock::now();
+  pipe.finish(end_us, out);
+  return seconds + std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;

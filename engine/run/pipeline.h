@@ -104,6 +104,10 @@ class PosePipeline {
   std::unique_ptr<Impl> impl_;
 };
 
+// Streams the events of an event file up to end_us through `pipe` (then its ticks through
+// end_us), poses to `out`. Returns the seconds spent in the pipeline, reading not counted.
+double run_file(PosePipeline& pipe, const std::string& path, std::int64_t end_us, const std::function<void(const Pose&)>& out);
+
 // The depth prior: head depth at which the predicted skeleton's limb lengths (upper arms,
 // forearms, thighs, shanks) sum to a body of the given height (Drillis-Contini fractions).
 double head_depth_from_height(const std::array<std::array<double, 3>, 13>& joints_at_unit_depth, double height_mm);

@@ -6,7 +6,6 @@
 #include <iomanip>
 #include <stdexcept>
 
-#include "camera/io/event_reader.h"
 #include "camera/sim/recording_windows.h"
 #include "engine/run/pipeline.h"
 
@@ -159,10 +158,7 @@ double fit_depth_scale(const std::vector<std::pair<double, double>>& head_depths
   std::vector<double> r;
   for (const auto& [truth, est] : head_depths)
     if (est > 0 && truth > 0) r.push_back(truth / est);
-  if (r.empty()) return 1;
-  auto mid = r.begin() + std::ptrdiff_t(r.size() / 2);
-  std::nth_element(r.begin(), mid, r.end());
-  return *mid;
+  return r.empty() ? 1 : percentile(r, 0.5);
 }
 
 std::vector<PresenceSample> presence_samples(const std::string& weights, const std::vector<std::string>& recordings,
@@ -173,7 +169,6 @@ std::vector<PresenceSample> presence_samples(const std::string& weights, const s
   opt.tick_origin_us = 0;
   for (std::size_t i = 0; i < recordings.size(); ++i) {
     const camera::sim::RecordingInfo info = camera::sim::read_recording_info(recordings[i]);
-    auto reader = camera::open_event_file(recordings[i]);
     PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);
     const std::int64_t end_us = info.first_event_us + std::llround(seconds * 1e6);
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
@@ -188,13 +183,7 @@ std::vector<PresenceSample> presence_samples(const std::string& weights, const s
         if (valid[0] && joints[0].z() > 1) head_depths->push_back({joints[0].z(), p.head_depth_mm});
       }
     };
-    std::vector<camera::Event> ev;
-    while (true) {
-      ev.clear();
-      if (reader->read_until(ev, end_us, 1 << 20) == 0) break;
-      pipe.push(ev, keep);
-    }
-    pipe.finish(end_us, keep);
+    run_file(pipe, recordings[i], end_us, keep);
     progress << "  [" << (i + 1) << "/" << recordings.size() << "] " << info.name << (info.dancer ? "" : " (empty)") << ": "
              << (out.size() - before) << " ticks\n";
   }

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <numeric>
 
-#include "camera/io/event_reader.h"
 #include "camera/sim/recording_reader.h"
 #include "camera/sim/rng.h"
 
@@ -107,9 +106,7 @@ struct StreamScorer {
     r.stage2_ms = s2_ms / timed;
     r.crop_share = crop_share(crops);
     if (!depth_ratio.empty()) {
-      auto mid = depth_ratio.begin() + std::ptrdiff_t(depth_ratio.size() / 2);
-      std::nth_element(depth_ratio.begin(), mid, depth_ratio.end());
-      r.depth_ratio_median = *mid;
+      r.depth_ratio_median = percentile(depth_ratio, 0.5);
       r.depth_abs_error_mm = depth_abs / double(depth_ratio.size());
     }
     return r;
@@ -146,13 +143,11 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
 StreamEvalResult evaluate_recordings(const std::string& weights, const std::vector<std::string>& recordings, double seconds,
                                      double skip_s, const RunOptions& run, std::ostream& progress) {
   namespace sim = camera::sim;
-  using Clock = std::chrono::steady_clock;
   StreamScorer sc;
   RunOptions opt = run;
   opt.tick_origin_us = 0;
   for (std::size_t i = 0; i < recordings.size(); ++i) {
     const sim::RecordingInfo info = sim::read_recording_info(recordings[i]);
-    auto reader = camera::open_event_file(recordings[i]);
     PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);
     const std::int64_t end_us = info.first_event_us + std::llround(seconds * 1e6);
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
@@ -160,18 +155,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     const auto keep = [&](const Pose& p) {
       if (p.t_us >= skip_us && p.t_us <= end_us) poses.push_back(p);
     };
-    std::vector<camera::Event> ev;
-    double wall = 0;
-    while (true) {
-      ev.clear();
-      if (reader->read_until(ev, end_us, 1 << 20) == 0) break;
-      const auto t0 = Clock::now();
-      pipe.push(ev, keep);
-      wall += std::chrono::duration<double>(Clock::now() - t0).count();
-    }
-    const auto t0 = Clock::now();
-    pipe.finish(end_us, keep);
-    sc.r.wall_s += wall + std::chrono::duration<double>(Clock::now() - t0).count();
+    sc.r.wall_s += run_file(pipe, recordings[i], end_us, keep);
     sim::Joints13 joints;
     std::array<std::uint8_t, sim::kJointCount> valid{};
     for (const Pose& p : poses) {
