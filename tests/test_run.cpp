@@ -491,6 +491,36 @@ TEST_CASE("run: presence calibration recovers a known logistic law and reports i
   CHECK(contains(text.str(), "    dynamic   dancer 100.0% of 1; empty 100.0% of 1\n"));
 }
 
+TEST_CASE("run: the presence calibration settles where a refit flips between two fits", "[run]") {
+  using namespace yelan::run;
+  // A refit that mirrors its calibration about m: run under A, the ticks fit B, and under B
+  // they fit A (what weights calibrate met on the default: a 1.219 / b 4.104 against 1.208 /
+  // 4.151). Taking each fit as it comes never settles; moving halfway lands on m.
+  const std::array<double, 2> m = {1.2, 4.1}, A = {1.5, 3.6};
+  int runs = 0;
+  const auto refit = [&](const std::array<double, 2>& ab) {
+    ++runs;
+    return PresenceFit{2 * m[0] - ab[0], 2 * m[1] - ab[1], 0};
+  };
+  const PresenceFit fa{A[0], A[1], 0};
+  REQUIRE(presence_distance(A, {2 * m[0] - A[0], 2 * m[1] - A[1]}) > 0.1);
+  const PresenceSettle r = settle_presence({3.0, 13.8}, fa, refit, 0.02, 4);
+  CHECK(r.reruns == 2);  // under A, then halfway between A and the fit B: m
+  CHECK(runs == 2);
+  CHECK(r.used[0] == Approx(m[0]));
+  CHECK(r.used[1] == Approx(m[1]));
+  CHECK(r.moved < 0.02);
+  // A start that its own fit already matches is kept without a rerun.
+  const PresenceSettle kept = settle_presence(m, PresenceFit{m[0], m[1] + 1e-4, 0}, refit, 0.02, 4);
+  CHECK(kept.reruns == 0);
+  CHECK(kept.used == m);
+  // The reruns are bounded: a refit that always runs away stops after max_reruns.
+  const PresenceSettle bounded =
+      settle_presence(m, fa, [](const std::array<double, 2>& ab) { return PresenceFit{ab[0] + 1, ab[1] - 3, 0}; }, 0.02, 3);
+  CHECK(bounded.reruns == 3);
+  CHECK(bounded.moved >= 0.02);
+}
+
 TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings and stores it in the config", "[run][cli]") {
   yelan::test::CliTempDir d("calibrate");
   REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);

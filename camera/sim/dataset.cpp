@@ -149,6 +149,29 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
       d.train + d.val + d.test + d.train_empty + d.val_empty + d.test_empty == 0)
     throw std::invalid_argument("dataset: need a non-negative count per split, and at least one recording");
   if (!(d.duration_s >= 0.5 && d.duration_s <= 600)) throw std::invalid_argument("dataset: duration must be 0.5-600 s");
+  if (d.low_light_dn && !(*d.low_light_dn > 0 && *d.low_light_dn <= 1e5))
+    throw std::invalid_argument("dataset: low light must be in (0, 1e5] DN");
+  // Low light is not in the files' names: adding to a dataset drawn at another level would
+  // mix two lightings under one name. Manifests from before the key were drawn at 4 DN.
+  const double low_dn = d.low_light_dn ? *d.low_light_dn : lighting(LightLevel::low, false).level;
+  if (const fs::path old = fs::path(d.out_dir) / "manifest.json"; fs::exists(old)) {
+    std::ifstream in(old);
+    nlohmann::json m;
+    try {
+      m = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+      throw std::runtime_error(old.string() + ": not a dataset manifest (" + e.what() + ")");
+    }
+    const double was = m.is_object() && m.contains("low_light_dn") && m["low_light_dn"].is_number()
+                           ? m["low_light_dn"].get<double>()
+                           : 4.0;
+    if (was != low_dn) {
+      std::ostringstream msg;
+      msg << "dataset " << d.out_dir << " was drawn with low light at " << was << " DN (its manifest), this run would use "
+          << low_dn << ": give --low-light-dn " << was << " to add to it, or another folder";
+      throw std::invalid_argument(msg.str());
+    }
+  }
   struct Job {
     std::string split;
     SimSpec spec;
@@ -161,6 +184,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"duration_s", d.duration_s},
                                      {"looks", d.random_looks ? "random per training recording" : "the cast's"},
                                      {"frame_dancer", d.frame_dancer},
+                                     {"low_light_dn", low_dn},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"characters",
@@ -174,12 +198,14 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     fs::create_directories(fs::path(d.out_dir) / split);
     for (int i = 0; i < n; ++i) {
       Job j{split, dataset_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
+      if (d.low_light_dn && j.spec.scene.light == LightLevel::low) j.spec.scene.light_dn = d.low_light_dn;
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }
     const int empty = split == "train" ? d.train_empty : split == "val" ? d.val_empty : d.test_empty;
     for (int i = 0; i < empty; ++i) {
       Job j{split, dataset_empty_member(split, i, d.seed, d.duration_s), ""};
+      if (d.low_light_dn && j.spec.scene.light == LightLevel::low) j.spec.scene.light_dn = d.low_light_dn;
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

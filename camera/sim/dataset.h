@@ -11,6 +11,7 @@
 // same bytes, done files are kept, so an interrupted run resumes where it stopped.
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -34,6 +35,10 @@ struct DatasetSpec {
   // Every dancer recording frames its dancer (SimSpec::frame_dancer): without it, a clip
   // started anywhere leaves a quarter of the joints out of the picture.
   bool frame_dancer = false;
+  // When set, the lamp's level in DN of every low-light member (dancer and empty) instead of
+  // the simulator's (SceneConfig::light_dn): 4 makes ds-s1 and ds-s2, drawn before low light
+  // was raised to 20 DN.
+  std::optional<double> low_light_dn;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };

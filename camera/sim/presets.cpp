@@ -89,7 +89,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
   SimSpec s = j.contains("preset") ? preset_spec(j.at("preset").get<std::string>()) : SimSpec{};
   static const std::vector<std::string> known = {
       "preset", "name", "character", "motion", "speed", "mirror", "yaw_offset_deg", "static_legs", "view", "yaw_deg",
-      "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "flicker", "background", "occluders",
+      "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "light_dn", "flicker", "background", "occluders",
       "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir", "looks_seed"};
   for (auto& [key, value] : j.items())
     if (std::find(known.begin(), known.end(), key) == known.end())
@@ -119,6 +119,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     if (j.contains("focal_px")) s.scene.intrinsics = davis346(j.at("focal_px").get<double>());
     if (j.contains("lighting") && !parse_light(v = j.at("lighting").get<std::string>(), s.scene.light))
       throw std::invalid_argument("lighting '" + v + "' is not high|medium|low");
+    if (j.contains("light_dn")) s.scene.light_dn = j.at("light_dn").get<double>();
     if (j.contains("flicker")) s.scene.flicker = j.at("flicker").get<bool>();
     if (j.contains("background") && !parse_background(v = j.at("background").get<std::string>(), s.scene.background))
       throw std::invalid_argument("background '" + v + "' is not static|dynamic");

@@ -43,7 +43,8 @@ Vec3 camera_centre(const CameraModel& cam);
 
 enum class LightLevel { high, medium, low };
 const char* light_name(LightLevel l);
-// high ~ office (white facing the light = 255), medium 60, low 4 (~1-10 lux, dim lamp).
+// high ~ office (white facing the light = 255), medium 60, low 20 (a dim lamp: the pixel's
+// lin-log knee, where events thin out and noise dominates but a dancer still shows).
 // Flicker: 100 Hz ripple of depth 10% (high), 20% (medium), 30% (low).
 Lighting lighting(LightLevel level, bool flicker);
 
@@ -55,6 +56,9 @@ struct SceneConfig {
   double height_mm = 1200;
   CameraModel intrinsics = davis346();  // K and size; M is ignored
   LightLevel light = LightLevel::high;
+  // When set, the lamp's level in DN (white facing the light) instead of the lighting's
+  // (255 / 60 / 4); ambient share and flicker depth stay the lighting's.
+  std::optional<double> light_dn;
   bool flicker = false;
   enum Background { static_wall, dynamic };
   Background background = static_wall;

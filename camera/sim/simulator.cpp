@@ -266,7 +266,7 @@ void Simulator::run_until(double t_end_s, SimSink& sink) {
 
 std::string Simulator::description_json() const {
   const SceneConfig& sc = scene_.config();
-  const nlohmann::ordered_json j = {
+  nlohmann::ordered_json j = {
       {"name", spec_.name},
       {"character", character_.name},
       {"clothing", clothing_name(character_.clothing)},
@@ -294,6 +294,8 @@ std::string Simulator::description_json() const {
       {"label_hz", spec_.label_hz},
       {"mask_hz", spec_.mask_hz},
       {"scene", scene_.description()}};
+  // Only where it overrides the lighting's level, so the descriptions of other scenes keep their bytes.
+  if (sc.light_dn && *sc.light_dn != lighting(sc.light, false).level) j["light_dn"] = *sc.light_dn;
   return j.dump();
 }
 

@@ -80,7 +80,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 }  // namespace
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip"},
+  const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
+                "--low-light-dn"},
                {"--true-mask", "--no-floors", "--run", "--unframed"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
@@ -115,6 +116,12 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
       picked.push_back(spec.scenes[i]);
     }
     spec.scenes = picked;
+  }
+  if (a.value("--low-light-dn")) {
+    if (data) throw UsageError("--low-light-dn is for --sim scenes (a recording's light is in its events)");
+    const double dn = a.number_or("--low-light-dn", 20, 1e-3, 1e5);
+    for (auto& sc : spec.scenes)
+      if (sc.scene.light == camera::sim::LightLevel::low) sc.scene.light_dn = dn;
   }
   if (const auto t = a.value("--threads")) {
     const auto n = parse_thread_count(*t);

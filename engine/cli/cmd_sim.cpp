@@ -171,6 +171,7 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   d.duration_s = parse_duration_s(a.value_or("--duration", "5s"));
   d.random_looks = a.flag("--random-looks");
   d.frame_dancer = a.flag("--frame-dancer");
+  if (a.value("--low-light-dn")) d.low_light_dn = a.number_or("--low-light-dn", 20, 1e-3, 1e5);
   d.threads = a.int_value_or("--threads", 0, 0, 256);
   d.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   try {
@@ -210,7 +211,7 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
   const Args a("sim", argv,
                {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
                 "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes",
-                "--dataset", "--train", "--val", "--test", "--train-empty", "--val-empty", "--test-empty"},
+                "--dataset", "--train", "--val", "--test", "--train-empty", "--val-empty", "--test-empty", "--low-light-dn"},
                {"--list", "--quiet", "--force", "--random-looks", "--frame-dancer"});
   a.expect_positionals(0, 0);
   if (a.value("--threads")) omp_set_num_threads(a.int_value_or("--threads", 1, 1, 256));

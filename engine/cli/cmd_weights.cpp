@@ -267,27 +267,23 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   run::print_presence_report(run::presence_report(samples, before.presence_a, before.presence_b, 0.5), out);
   // The look-again rule reads the calibration (a stored mask that says nobody is not reused),
   // so the ticks run under a fit differ from those it was fitted on: run again under the fit
-  // and refit until P(person) moves by less than 0.02 at every share (at most 3 more runs).
-  // What is stored is the calibration the last run ran under, and its report is that run's.
-  run::PresenceFit fit = run::fit_presence(samples);
-  std::array<double, 2> used = {before.presence_a, before.presence_b};
-  const auto moved = [](const std::array<double, 2>& x, const run::PresenceFit& f) {
-    double most = 0;
-    for (double s = 1e-4; s <= 1; s *= 1.25)
-      most = std::max(most, std::abs(run::presence_probability(s, x[0], x[1]) - run::presence_probability(s, f.a, f.b)));
-    return most;
-  };
-  for (int round = 1; round <= 3 && moved(used, fit) >= 0.02; ++round) {
-    used = {fit.a, fit.b};
-    opt.presence_ab = used;
-    err << std::defaultfloat << std::setprecision(6) << "running again under a " << used[0] << ", b " << used[1] << "\n";
-    depths.clear();
-    samples = run::presence_samples(*w, recs, opt, seconds + skip, skip, err, &depths);
-    fit = run::fit_presence(samples);
-  }
+  // until a refit would move P(person) by less than 0.02 (at most 4 more runs, halfway steps
+  // after the first). What is stored is the calibration the last run ran under, and its
+  // report is that run's.
+  const auto settled = run::settle_presence(
+      {before.presence_a, before.presence_b}, run::fit_presence(samples),
+      [&](const std::array<double, 2>& ab) {
+        opt.presence_ab = ab;
+        err << std::defaultfloat << std::setprecision(6) << "running again under a " << ab[0] << ", b " << ab[1] << "\n";
+        depths.clear();
+        samples = run::presence_samples(*w, recs, opt, seconds + skip, skip, err, &depths);
+        return run::fit_presence(samples);
+      },
+      0.02, 4);
+  const std::array<double, 2> used = settled.used;
   out << std::defaultfloat << std::setprecision(6) << "fitted: a " << used[0] << ", b " << used[1] << " (balanced log-loss "
       << run::presence_log_loss(samples, used[0], used[1]) << "; refitting on its own ticks would move P(person) by "
-      << std::setprecision(2) << moved(used, fit) << " at most):\n";
+      << std::setprecision(2) << settled.moved << " at most):\n";
   run::print_presence_report(run::presence_report(samples, used[0], used[1], 0.5), out);
   std::ostringstream pj;
   pj << std::setprecision(9) << "{\"a\": " << used[0] << ", \"b\": " << used[1] << "}";

@@ -39,6 +39,7 @@ const std::vector<Command>& commands() {
        "                 [--characters a,b] [--motions m,..] [--views v,..] [--lights l,..] [--backgrounds b,..] [--force]\n"
        "       yelan sim --dataset DIR [--seed N] [--train 400] [--val 40] [--test 60] [--duration 5s] [--threads T]\n"
        "                 [--train-empty N] [--val-empty N] [--test-empty N] [--random-looks] [--frame-dancer]\n"
+       "                 [--low-light-dn DN]\n"
        "       yelan sim --list\n"
        "A character performs a CMU clip or a procedural dance in a scene; a ray caster renders\n"
        "it at an adaptive rate (>= 1 kHz) and a v2e-style pixel model makes the events. OUT holds\n"
@@ -60,6 +61,9 @@ const std::vector<Command>& commands() {
        "--frame-dancer: each dancer turned to face the view's way at the recording's start and\n"
        "centred in the picture on average (a clip started anywhere otherwise leaves the mocap\n"
        "subject wherever they had walked: a quarter of the joints out of the picture).\n"
+       "--low-light-dn DN: the lamp of low-light scenes at DN (default the simulator's 20; 4\n"
+       "makes the datasets drawn before 2026-11-27, ds-s1 and ds-s2, whose low-light dancers\n"
+       "hardly show). A dataset is only added to at the level its manifest names.\n"
        "Presets end in any of -occluded, -flicker, -pan (the camera sweeps +-6 deg every 8 s),\n"
        "-shake (a hand-held tremor) and -empty (nobody there).\n",
        cmd_sim, "the motion-to-event simulator (issue 6)"},
@@ -91,14 +95,15 @@ const std::vector<Command>& commands() {
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
-       "                  [--true-mask] [--history 5] [--no-floors] [--unframed] [--json OUT] [--threads T]\n"
+       "                  [--true-mask] [--history 5] [--no-floors] [--unframed] [--low-light-dn DN] [--json OUT] [--threads T]\n"
        "       yelan eval --run --weights W --sim test|--data DIR [--seed N] [--scenes M] [--seconds 1] [--beta B] [--skip 0.5] [--json OUT]\n"
        "Both networks as deployed on simulated scenes: --sim test draws M scenes of the test\n"
        "split (held-out characters and motions; views, lightings and backgrounds in turn)\n"
        "with seed N, each starting anywhere in its clip after --history s of events, so anyone\n"
        "can check a model on scenes it never saw; the dancer faces the view's way at the\n"
        "scene's start and stands centred in the picture (--unframed: the clip's own placement,\n"
-       "as figures before this option were measured). --data DIR: the labelled recordings in DIR\n"
+       "as figures before this option were measured; --low-light-dn 4: the low light of figures\n"
+       "before 2026-11-27, under which low-light dancers hardly show). --data DIR: the labelled recordings in DIR\n"
        "(*.yelan.h5), up to --seconds of each. A window's TORE holds the events of up to\n"
        "--history s before it (5: all TORE reads, as yelan run). Joints are denormalised with\n"
        "the true head depth (the paper protocol). Prints MPJPE, PCK@150, AUC (also\n"

@@ -38,6 +38,28 @@ double balanced_log_loss(const std::vector<PresenceSample>& samples, double a, d
 
 }  // namespace
 
+double presence_distance(const std::array<double, 2>& x, const std::array<double, 2>& y) {
+  double most = 0;
+  for (double s = 1e-4; s <= 1; s *= 1.25)
+    most = std::max(most, std::abs(presence_probability(s, x[0], x[1]) - presence_probability(s, y[0], y[1])));
+  return most;
+}
+
+PresenceSettle settle_presence(const std::array<double, 2>& start, const PresenceFit& first_fit,
+                               const std::function<PresenceFit(const std::array<double, 2>&)>& refit,
+                               double tolerance, int max_reruns) {
+  PresenceSettle r{start, first_fit, 0, presence_distance(start, {first_fit.a, first_fit.b})};
+  while (r.reruns < max_reruns && r.moved >= tolerance) {
+    const std::array<double, 2> fitted = {r.fit.a, r.fit.b};
+    r.used = r.reruns == 0 ? fitted
+                           : std::array<double, 2>{0.5 * (r.used[0] + fitted[0]), 0.5 * (r.used[1] + fitted[1])};
+    r.fit = refit(r.used);
+    ++r.reruns;
+    r.moved = presence_distance(r.used, {r.fit.a, r.fit.b});
+  }
+  return r;
+}
+
 double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b) {
   const auto w = class_weights(samples);
   return balanced_log_loss(samples, a, b, w[0], w[1]);

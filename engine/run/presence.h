@@ -3,7 +3,9 @@
 // labelled recordings (scenes with a dancer and empty ones) run through the deployed
 // pipeline, and stored in the model's config (run.presence).
 #pragma once
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <ostream>
 #include <string>
@@ -32,6 +34,25 @@ struct PresenceFit {
 PresenceFit fit_presence(const std::vector<PresenceSample>& samples);
 // The class-balanced mean negative log-likelihood of P(person) = sigmoid(a ln(s + 0.001) + b).
 double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b);
+
+// The largest change in P(person) between calibrations x and y over the shares a mask can
+// cover (1e-4 .. 1).
+double presence_distance(const std::array<double, 2>& x, const std::array<double, 2>& y);
+
+// The calibration a pipeline should run under so that refitting on its own ticks moves
+// P(person) by less than `tolerance`: the look-again rule reads the calibration, so the
+// ticks depend on it. `refit(ab)` runs the ticks under ab and returns the fit to them.
+// The first rerun takes the fit as it is; later ones move halfway, since a fit can flip
+// between two calibrations whose ticks each fit the other. At most `max_reruns` reruns.
+struct PresenceSettle {
+  std::array<double, 2> used;  // the calibration the last run ran under
+  PresenceFit fit;             // the fit to that run's ticks
+  int reruns = 0;
+  double moved = 0;  // presence_distance(used, fit)
+};
+PresenceSettle settle_presence(const std::array<double, 2>& start, const PresenceFit& first_fit,
+                               const std::function<PresenceFit(const std::array<double, 2>&)>& refit,
+                               double tolerance, int max_reruns);
 
 struct PresenceReport {
   std::uint64_t person_ticks = 0, empty_ticks = 0;

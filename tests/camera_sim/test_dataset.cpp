@@ -77,7 +77,7 @@ TEST_CASE("dataset: a clip segment and a start offset play inside the segment, b
   CHECK_THROWS(Simulator(s));
 }
 
-TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's temp files removed), with a manifest", "[sim]") {
+TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's temp files removed), with a manifest, added to only at its low light", "[sim]") {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("yelan-dataset-" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
@@ -106,6 +106,19 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   text << m.rdbuf();
   CHECK(text.str().find("\"yelan-dataset-manifest\"") != std::string::npos);
   CHECK(text.str().find(first) != std::string::npos);
+  CHECK(text.str().find("\"low_light_dn\": 20") != std::string::npos);
+  // Low light is not in the names: adding at another level than the manifest's is refused.
+  d.low_light_dn = 4;
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--low-light-dn 20"));
+  // A manifest from before the key was drawn at 4 DN.
+  std::string old = text.str();
+  const auto key = old.find("\"low_light_dn\"");
+  old.erase(key, old.find('\n', key) + 1 - key);
+  std::ofstream(dir / "manifest.json") << old;
+  CHECK(make_dataset(d, log) == 0);
+  d.low_light_dn.reset();
+  std::ofstream(dir / "manifest.json") << old;
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--low-light-dn 4"));
   d.duration_s = 0;
   CHECK_THROWS_AS(make_dataset(d, log), std::invalid_argument);
   std::filesystem::remove_all(dir);

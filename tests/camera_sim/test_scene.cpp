@@ -107,7 +107,7 @@ TEST_CASE("render.scene views see the dancer's front, back, left and right") {
 }
 
 TEST_CASE("render.scene light levels set the intensity scale") {
-  const double expect[3] = {255, 60, 4};
+  const double expect[3] = {255, 60, 20};
   const LightLevel levels[3] = {LightLevel::high, LightLevel::medium, LightLevel::low};
   for (int i = 0; i < 3; ++i) {
     const Lighting l = lighting(levels[i], false);
