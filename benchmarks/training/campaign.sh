@@ -4,7 +4,7 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-mask-looks2|save|restore|combine|all]
+#   benchmarks/training/campaign.sh [dataset|dataset-looks|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|save|restore|combine|all]
 #   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
@@ -18,6 +18,9 @@ DATA=${DATA:-/var/tmp/yelan-data/ds-s1}
 # and 7 of the 32 val recordings never show their dancer); the empty scenes are ds-s1's
 # files (hard links, or simulated again: the same events).
 DATA_LOOKS=${DATA_LOOKS:-/var/tmp/yelan-data/ds-s2}
+# ds-s2 with low light at 20 DN, the simulator's since 2026-11-27 (ds-s2's low-light dancers
+# hardly show in the events): only its low-light members differ.
+DATA_S3=${DATA_S3:-/var/tmp/yelan-data/ds-s3}
 RUNS=${RUNS:-/var/tmp/yelan-data/runs}
 CFG=${CFG:-benchmarks/configs/small-pose0.125.json}
 POSE_STEPS=${POSE_STEPS:-14000}
@@ -34,6 +37,20 @@ dataset_looks() {
   fi
   "$Y" sim --dataset "$DATA_LOOKS" --seed 1 --train "${LOOKS_TRAIN:-200}" --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
     --random-looks --frame-dancer --low-light-dn 4 --threads 2
+}
+
+# The other members are the same bytes as ds-s2's (hard links); only the low-light ones
+# (69 of 288) are simulated, about 16 min on 2 cores (all of them without ds-s2).
+dataset_s3() {
+  mkdir -p "$DATA_S3/train" "$DATA_S3/val"
+  for split in train val; do
+    [ -d "$DATA_LOOKS/$split" ] || continue
+    for f in "$DATA_LOOKS/$split"/*.yelan.h5; do
+      case "$(basename "$f")" in *-low-*) ;; *) ln -f "$f" "$DATA_S3/$split/" ;; esac
+    done
+  done
+  "$Y" sim --dataset "$DATA_S3" --seed 1 --train "${LOOKS_TRAIN:-200}" --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
+    --random-looks --frame-dancer --threads 2
 }
 
 dataset() {
@@ -56,6 +73,7 @@ mkdir -p "$RUNS"
 case "$what" in
   dataset) dataset ;;
   dataset-looks) dataset_looks ;;
+  dataset-s3) dataset_s3 ;;
   train)
     "$0" train-mask-s2 &
     "$0" train-pose &
@@ -106,6 +124,11 @@ case "$what" in
   # campaign's 20 CPU-hours (lr 9.7e-4 -> 9.1e-4 at the resume).
   train-pose-small-nomask)
     CFG=benchmarks/configs/small-nomask.json DATA=$DATA_LOOKS train pose pose-small-nomask "${POSE_SMALL_STEPS:-5000}" --occlusion ;;
+  # The shipped pose net on ds-s3, where low-light dancers show: a short cosine from
+  # models/default.h5 (its pose group), as pose-looks-nomask2 on ds-s2.
+  train-pose-s3)
+    CFG=benchmarks/configs/small-pose0.125-nomask.json DATA=$DATA_S3 train pose pose-s3 \
+      "${POSE_S3_STEPS:-1000}" --occlusion --lr 3e-4 --init "${POSE_S3_INIT:-models/default.h5}" ;;
   # Heatmap resolution against width at equal multiply-adds: the 1/8 width on the full
   # sensor (33 x 44 heatmaps, 535 MFLOP a pose) beside pose-small-nomask (the quarter width
   # at half resolution, 17 x 22 heatmaps, 459 MFLOP), the same data, occlusion and cosine
@@ -142,7 +165,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask mask-p0125 mask-neg mask-s2 mask-looks mask-looks2; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 mask-p0125 mask-neg mask-s2 mask-looks mask-looks2; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
