@@ -57,7 +57,7 @@ struct SceneConfig {
   CameraModel intrinsics = davis346();  // K and size; M is ignored
   LightLevel light = LightLevel::high;
   // When set, the lamp's level in DN (white facing the light) instead of the lighting's
-  // (255 / 60 / 4); ambient share and flicker depth stay the lighting's.
+  // (255 / 60 / 20); ambient share and flicker depth stay the lighting's.
   std::optional<double> light_dn;
   bool flicker = false;
   enum Background { static_wall, dynamic };
