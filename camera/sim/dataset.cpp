@@ -198,18 +198,17 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     fs::create_directories(fs::path(d.out_dir) / split);
     for (int i = 0; i < n; ++i) {
       Job j{split, dataset_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
-      if (d.low_light_dn && j.spec.scene.light == LightLevel::low) j.spec.scene.light_dn = d.low_light_dn;
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }
     const int empty = split == "train" ? d.train_empty : split == "val" ? d.val_empty : d.test_empty;
     for (int i = 0; i < empty; ++i) {
       Job j{split, dataset_empty_member(split, i, d.seed, d.duration_s), ""};
-      if (d.low_light_dn && j.spec.scene.light == LightLevel::low) j.spec.scene.light_dn = d.low_light_dn;
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }
   }
+  for (Job& j : jobs) set_low_light_dn(j.spec.scene, d.low_light_dn);
   // Temporary files of a run that was killed (name.tmp-PID-XXXXXX, its process gone) are removed:
   // their recordings are simulated again.
   for (const char* split : {"train", "val", "test"}) {

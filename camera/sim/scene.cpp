@@ -176,6 +176,10 @@ Lighting lighting(LightLevel level, bool flicker) {
   return l;
 }
 
+void set_low_light_dn(SceneConfig& scene, std::optional<double> dn) {
+  if (dn && scene.light == LightLevel::low) scene.light_dn = dn;
+}
+
 Scene::Scene(const SceneConfig& config)
     : config_(config), light_(lighting(config.light, config.flicker)), renderer_(config.render) {
   if (config.light_dn) {

@@ -73,6 +73,10 @@ struct SceneConfig {
   RenderOptions render;
 };
 
+// A low-light scene's lamp at `dn` DN when dn is set (datasets and evaluations drawn under
+// another low light than the simulator's); other scenes are left as they are.
+void set_low_light_dn(SceneConfig& scene, std::optional<double> dn);
+
 class Scene {
  public:
   explicit Scene(const SceneConfig& config);

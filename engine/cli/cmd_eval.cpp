@@ -120,8 +120,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (a.value("--low-light-dn")) {
     if (data) throw UsageError("--low-light-dn is for --sim scenes (a recording's light is in its events)");
     const double dn = a.number_or("--low-light-dn", 20, 1e-3, 1e5);
-    for (auto& sc : spec.scenes)
-      if (sc.scene.light == camera::sim::LightLevel::low) sc.scene.light_dn = dn;
+    for (auto& sc : spec.scenes) camera::sim::set_low_light_dn(sc.scene, dn);
   }
   if (const auto t = a.value("--threads")) {
     const auto n = parse_thread_count(*t);
