@@ -90,6 +90,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     const json& r = section(d, "run", where);
     if (r.contains("beta")) c.run_beta = get_num(r, where + ".run", "beta");
     if (r.contains("depth_scale")) c.depth_scale = get_num(r, where + ".run", "depth_scale");
+    if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");
     if (r.contains("presence")) {
       const json& pr = section(r, "presence", where + ".run");
       c.presence_a = get_num(pr, where + ".run.presence", "a");
@@ -114,6 +115,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.representation != "counts" || c.channels == 2, "input.channels must be 2 for counts (one per polarity)"},
       {c.run_beta >= 0 && c.run_beta <= 2, "run.beta must be in 0..2 (above 1: stage 1 on every tick)"},
       {c.depth_scale > 0 && c.depth_scale <= 1000, "run.depth_scale must be in (0, 1000]"},
+      {c.mask_cut > 0 && c.mask_cut < 1, "run.mask_cut must be in (0, 1)"},
       {std::isfinite(c.presence_a) && std::isfinite(c.presence_b) && c.presence_a >= 0,
        "run.presence: a must be finite and >= 0, b finite"},
       {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},

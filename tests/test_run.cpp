@@ -149,6 +149,29 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
     CHECK(bad_scale.code == 2);
     CHECK(contains(bad_scale.err, "run.depth_scale must be in (0, 1000]"));
   }
+  for (const char* cut : {"0", "1", "-0.2"}) {
+    std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"mask_cut\": " << cut << "}}\n";
+    const auto bad_cut = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
+    CHECK(bad_cut.code == 2);
+    CHECK(contains(bad_cut.err, "run.mask_cut must be in (0, 1)"));
+  }
+  // run.mask_cut is where stage 1's masks are cut: a higher cut never covers more of the
+  // frame (the same net: same seed; stage 1 on every tick).
+  double last_share = 2, first_share = 0;
+  for (const char* cut : {"0.01", "0.5", "0.999999"}) {
+    std::ofstream(d / "cut.json") << cfg.substr(0, brace) << ", \"run\": {\"presence\": {\"a\": 0, \"b\": 30}, \"mask_cut\": "
+                                   << cut << "}}\n";
+    REQUIRE(run_cli({"weights", "init", "--config", d / "cut.json", "--seed", "2", "-o", d / "cut.h5"}).code == 0);
+    REQUIRE(run_cli({"run", "--weights", d / "cut.h5", d / "r.yelan.h5", "--out", d / "c.csv", "--no-early-exit"}).code == 0);
+    const auto crows = csv_rows(slurp(d / "c.csv"));
+    double share = 0;
+    for (std::size_t i = 1; i < crows.size(); ++i) share += std::stod(crows[i][44]);
+    share /= double(crows.size() - 1);
+    CHECK(share <= last_share);
+    if (last_share == 2) first_share = share;
+    last_share = share;
+  }
+  CHECK(first_share > last_share + 0.05);
   // run.depth_scale multiplies the deployed depth, so every joint (the same net: same seed).
   std::ofstream(d / "half.json") << cfg.substr(0, brace) << ", \"run\": {\"beta\": 0.25, \"presence\": {\"a\": 0, \"b\": 30}, "
                                   << "\"depth_scale\": 0.5}}\n";
@@ -561,9 +584,12 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(run_cli({"weights", "diff", d / "w.h5", d / "c.h5"}).code == 0);
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "w.h5"}).code == 2);
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "-o", d / "x.h5"}).code == 2);
+  const auto calibrate_choosing = [&](const std::string& out, const char* flag) {
+    return run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / out, "--seconds", "0.3",
+                    "--skip", "0.1", flag});
+  };
   // --choose-beta sweeps beta on the dancer recordings and stores the cheapest within tolerance.
-  const auto b = run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "b.h5", "--seconds",
-                          "0.3", "--skip", "0.1", "--choose-beta"});
+  const auto b = calibrate_choosing("b.h5", "--choose-beta");
   INFO(b.err);
   REQUIRE(b.code == 0);
   CHECK(contains(b.out, "beta sweep"));
@@ -573,6 +599,15 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "y.h5", "--beta", "0.9",
                  "--choose-beta"})
             .code == 2);
+  // --choose-mask-cut sweeps stage 1's cut and stores the one of best IoU, before the fit.
+  const auto m = calibrate_choosing("m.h5", "--choose-mask-cut");
+  INFO(m.err);
+  REQUIRE(m.code == 0);
+  CHECK(contains(m.out, "mask cut sweep (IoU, stage 1 on every tick):  0.1: "));
+  CHECK(contains(m.out, "chosen: run.mask_cut "));
+  CHECK(m.out.find("chosen: run.mask_cut") < m.out.find("fitted: a "));
+  CHECK(contains(m.out, ", run.mask_cut)"));
+  CHECK(contains(run_cli({"weights", "inspect", d / "m.h5"}).out, "\"mask_cut\""));
 }
 
 #include "engine/run/early_exit.h"

@@ -63,12 +63,12 @@ void draw_scene(Rng& r, const SceneDraw& d, double duration_s, SimSpec& s) {
   s.seed = r.bits() & 0xffffffffffffull;
 }
 
-// "<view>-<light>-<bg>[-occluded][-flicker][-pan|-shake]"
+// "<view>-<light>-<bg>[-occluded][-flicker][-clutter][-pan|-shake|-sweep]"
 std::string scene_suffix(const SimSpec& s) {
   return std::string(view_name(s.scene.view)) + "-" + light_name(s.scene.light) + "-" +
          (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static") + (s.scene.occluders ? "-occluded" : "") +
-         (s.scene.flicker ? "-flicker" : "") +
-         (s.scene.camera_motion == SceneConfig::pan ? "-pan" : s.scene.camera_motion == SceneConfig::shake ? "-shake" : "");
+         (s.scene.flicker ? "-flicker" : "") + (s.scene.clutter ? "-clutter" : "") +
+         (s.scene.camera_motion == SceneConfig::still ? "" : std::string("-") + camera_motion_name(s.scene.camera_motion));
 }
 
 }  // namespace
@@ -125,20 +125,40 @@ SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, doub
   return s;
 }
 
-SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s) {
+namespace {
+
+// A scene with nobody in it, named <split>-<kind>-NNNNN-<scene>, drawn from its own stream.
+// The camera's motion is drawn after the scene (`camera` maps that draw to a motion), so the
+// still-camera empty scenes stayed what they were when camera motion came.
+SimSpec nobody_member(const std::string& split, int i, std::uint64_t seed, double duration_s, const char* kind,
+                      std::uint64_t stream, std::uint64_t tag, double dynamic_p, bool clutter,
+                      SceneConfig::CameraMotion (*camera)(double)) {
   dataset_characters(split);  // checks the split's name
-  Rng r(hash64(seed, split_stream(split) ^ 0xe3e3, std::uint64_t(i)), 0xe3e7);
+  Rng r(hash64(seed, split_stream(split) ^ stream, std::uint64_t(i)), tag);
   SimSpec s;
   s.dancer = false;
   s.motion = "dance";  // moves nothing visible; keeps the sampling rate of a scene with motion
-  draw_scene(r, {45, 2500, 5000, 800, 1800, 0.34, 0.67, 0.7, 0.5, 0.3}, duration_s, s);
-  // Drawn after the rest, so the scenes of a still camera stay as they were.
-  const double u = r.uniform();
-  s.scene.camera_motion = u < 0.4 ? SceneConfig::still : u < 0.7 ? SceneConfig::pan : SceneConfig::shake;
+  draw_scene(r, {45, 2500, 5000, 800, 1800, 0.34, 0.67, dynamic_p, 0.5, 0.3}, duration_s, s);
+  s.scene.clutter = clutter;
+  s.scene.camera_motion = camera(r.uniform());
   std::ostringstream name;
-  name << split << "-empty-" << std::setw(5) << std::setfill('0') << i << "-" << scene_suffix(s);
+  name << split << "-" << kind << "-" << std::setw(5) << std::setfill('0') << i << "-" << scene_suffix(s);
   s.name = name.str();
   return s;
+}
+
+}  // namespace
+
+SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s) {
+  return nobody_member(split, i, seed, duration_s, "empty", 0xe3e3, 0xe3e7, 0.7, false, [](double u) {
+    return u < 0.4 ? SceneConfig::still : u < 0.7 ? SceneConfig::pan : SceneConfig::shake;
+  });
+}
+
+SimSpec dataset_room_member(const std::string& split, int i, std::uint64_t seed, double duration_s) {
+  return nobody_member(split, i, seed, duration_s, "room", 0x7007, 0x7009, 0.5, true, [](double u) {
+    return u < 0.15 ? SceneConfig::still : u < 0.3 ? SceneConfig::pan : u < 0.4 ? SceneConfig::shake : SceneConfig::sweep;
+  });
 }
 
 std::string dataset_file_name(const SimSpec& spec) { return spec.name + ".yelan.h5"; }
@@ -146,7 +166,8 @@ std::string dataset_file_name(const SimSpec& spec) { return spec.name + ".yelan.
 int make_dataset(const DatasetSpec& d, std::ostream& err) {
   if (d.out_dir.empty()) throw std::invalid_argument("dataset: no output folder");
   if (d.train < 0 || d.val < 0 || d.test < 0 || d.train_empty < 0 || d.val_empty < 0 || d.test_empty < 0 ||
-      d.train + d.val + d.test + d.train_empty + d.val_empty + d.test_empty == 0)
+      d.train_rooms < 0 || d.val_rooms < 0 || d.test_rooms < 0 ||
+      d.train + d.val + d.test + d.train_empty + d.val_empty + d.test_empty + d.train_rooms + d.val_rooms + d.test_rooms == 0)
     throw std::invalid_argument("dataset: need a non-negative count per split, and at least one recording");
   if (!(d.duration_s >= 0.5 && d.duration_s <= 600)) throw std::invalid_argument("dataset: duration must be 0.5-600 s");
   if (d.low_light_dn && !(*d.low_light_dn > 0 && *d.low_light_dn <= 1e5))
@@ -187,6 +208,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"low_light_dn", low_dn},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
+                                     {"room_counts", {{"train", d.train_rooms}, {"val", d.val_rooms}, {"test", d.test_rooms}}},
                                      {"characters",
                                       {{"train", dataset_characters("train")},
                                        {"val", dataset_characters("val")},
@@ -204,6 +226,12 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     const int empty = split == "train" ? d.train_empty : split == "val" ? d.val_empty : d.test_empty;
     for (int i = 0; i < empty; ++i) {
       Job j{split, dataset_empty_member(split, i, d.seed, d.duration_s), ""};
+      j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
+      jobs.push_back(j);
+    }
+    const int rooms = split == "train" ? d.train_rooms : split == "val" ? d.val_rooms : d.test_rooms;
+    for (int i = 0; i < rooms; ++i) {
+      Job j{split, dataset_room_member(split, i, d.seed, d.duration_s), ""};
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

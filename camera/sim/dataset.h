@@ -28,6 +28,10 @@ struct DatasetSpec {
   // backgrounds, flickering lamps, occluders and sensor noise at every lighting, drawn from
   // their own seed stream (adding them never changes the dancer members).
   int train_empty = 0, val_empty = 0, test_empty = 0;
+  // Furnished rooms with nobody in them (<split>-room-NNNNN-...-clutter[-pan|-shake|-sweep]),
+  // most of them filmed by a hand-held camera looking around: what a real room in front of a
+  // moving event camera looks like (the empty scenes above are bare walls). Own seed stream.
+  int train_rooms = 0, val_rooms = 0, test_rooms = 0;
   double duration_s = 5;
   // Training recordings each get new looks (random_looks: body, garment, hair, every
   // material) instead of a cast member's; validation and test keep their held-out cast.
@@ -52,6 +56,7 @@ const std::vector<std::string>& dataset_characters(const std::string& split);
 SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s,
                        bool random_looks = false, bool frame_dancer = false);
 SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
+SimSpec dataset_room_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
 std::string dataset_file_name(const SimSpec& spec);
 
 // Simulates what is missing, in parallel, and writes the manifest (every member's scene as

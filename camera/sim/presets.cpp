@@ -37,7 +37,7 @@ bool parse_background(const std::string& s, SceneConfig::Background& b) {
   throw std::invalid_argument("preset '" + name + "': " + why +
                               " (expected <character>-<motion>-<view>-<light>-<bg> or <view>-<light>-<bg>, "
                               "view front|back|left|right, light high|medium|low, bg static|dynamic, "
-                              "optionally ending in -occluded, -flicker, -pan or -shake and/or -empty)");
+                              "optionally ending in -occluded, -flicker, -clutter, -pan, -shake or -sweep and/or -empty)");
 }
 
 }  // namespace
@@ -57,8 +57,11 @@ SimSpec preset_spec(const std::string& name) {
   SimSpec spec;
   spec.name = name;
   while (!parts.empty() && (parts.back() == "occluded" || parts.back() == "flicker" || parts.back() == "empty" ||
-                            parts.back() == "pan" || parts.back() == "shake")) {
+                            parts.back() == "pan" || parts.back() == "shake" || parts.back() == "sweep" ||
+                            parts.back() == "clutter")) {
     if (parts.back() == "empty") spec.dancer = false;
+    else if (parts.back() == "clutter") spec.scene.clutter = true;
+    else if (parts.back() == "sweep") spec.scene.camera_motion = SceneConfig::sweep;
     else if (parts.back() == "pan") spec.scene.camera_motion = SceneConfig::pan;
     else if (parts.back() == "shake") spec.scene.camera_motion = SceneConfig::shake;
     else (parts.back() == "occluded" ? spec.scene.occluders : spec.scene.flicker) = true;
@@ -89,7 +92,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
   SimSpec s = j.contains("preset") ? preset_spec(j.at("preset").get<std::string>()) : SimSpec{};
   static const std::vector<std::string> known = {
       "preset", "name", "character", "motion", "speed", "mirror", "yaw_offset_deg", "static_legs", "view", "yaw_deg",
-      "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "light_dn", "flicker", "background", "occluders",
+      "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "light_dn", "flicker", "background", "occluders", "clutter", "camera_motion",
       "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir", "looks_seed"};
   for (auto& [key, value] : j.items())
     if (std::find(known.begin(), known.end(), key) == known.end())
@@ -124,6 +127,14 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     if (j.contains("background") && !parse_background(v = j.at("background").get<std::string>(), s.scene.background))
       throw std::invalid_argument("background '" + v + "' is not static|dynamic");
     if (j.contains("occluders")) s.scene.occluders = j.at("occluders").get<bool>();
+    if (j.contains("clutter")) s.scene.clutter = j.at("clutter").get<bool>();
+    if (j.contains("camera_motion")) {
+      const std::string m = j.at("camera_motion").get<std::string>();
+      int k = 0;
+      while (k < 4 && m != camera_motion_name(k)) ++k;
+      if (k == 4) throw std::invalid_argument("camera_motion '" + m + "' is not still|pan|shake|sweep");
+      s.scene.camera_motion = SceneConfig::CameraMotion(k);
+    }
     // One line per JSON key, as SPEC names them: a table of fields, deliberately spelled out.
     num(j, "duration_s", s.duration_s);
     if (j.contains("seed")) s.seed = j.at("seed").get<std::uint64_t>();

@@ -1,5 +1,6 @@
 #include "camera/sim/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -24,6 +25,7 @@ enum Stream : std::uint64_t {
   kScreenStream = 0x5743'0005,
   kWalkerStream = 0x5743'0006,
   kCameraMotionStream = 0x5743'0007,
+  kClutterStream = 0x5743'0008,
 };
 
 Primitive quad(const Vec3& corner, const Vec3& e0, const Vec3& e1, const Material& m) {
@@ -76,6 +78,56 @@ void add_box(std::vector<Primitive>& out, const Vec3& c, const Vec3& along, cons
   out.push_back(quad(c0 + eh, ew, ed, mm));           // top
 }
 
+Pattern any_pattern(Rng& r) {
+  const Pattern all[4] = {Pattern::plain, Pattern::stripes, Pattern::checks, Pattern::print};
+  return all[r.below(4)];
+}
+
+// A furnished room: what a real room puts in front of an event camera (SceneConfig::clutter).
+// `ahead`, `right`: horizontal unit vectors from the camera towards the dancer's spot and to
+// the image's right; the wall stands wall_mm beyond the spot, the camera distance_mm before it.
+void add_clutter(Rng& r, const Vec3& ahead, const Vec3& right, double wall_mm, double distance_mm,
+                 std::vector<Primitive>& out) {
+  const Vec3 up = Vec3::UnitZ();
+  const int posters = 6 + r.below(7);
+  for (int i = 0; i < posters; ++i) {
+    const double w = r.uniform(200, 1600), h = r.uniform(200, 1600);
+    const Vec3 c0 = (wall_mm - r.uniform(5, 300)) * ahead + r.uniform(-5000, 5000) * right + r.uniform(0, 2400) * up;
+    out.push_back(quad(c0, w * right, h * up, textured(r, any_pattern(r), 20, 250, 0.05, 0.95, c0, right, up)));
+  }
+  // Floor items stand between 1.2 m before the camera and the wall, off the dancer's spot.
+  auto floor_spot = [&](double clear_mm) {
+    Vec3 c;
+    do {
+      c = r.uniform(-(distance_mm - 1200), wall_mm - 400) * ahead + r.uniform(-3500, 3500) * right;
+    } while (std::fabs(c.dot(ahead)) < clear_mm && std::fabs(c.dot(right)) < clear_mm);
+    return c;
+  };
+  const int boxes = 2 + r.below(5);
+  for (int i = 0; i < boxes; ++i) {
+    const double w = r.uniform(300, 1500), d = r.uniform(300, 800), h = r.uniform(300, 1900);
+    const Vec3 c = floor_spot(700 + 0.5 * std::max(w, d));
+    add_box(out, c, right, ahead, w, d, h, textured(r, any_pattern(r), 30, 300, 0.05, 0.9, c, right, up));
+  }
+  const int poles = 1 + r.below(4);  // a person-tall vertical edge is what stage 1 mistakes for a dancer
+  for (int i = 0; i < poles; ++i) {
+    const Vec3 c = floor_spot(700);
+    const double rad = r.uniform(15, 90);
+    out.push_back(capsule(c, c + r.uniform(1200, 2800) * up, rad, rad,
+                          textured(r, any_pattern(r), 30, 200, 0.05, 0.9, c, up, right)));
+  }
+  const int lamps = 1 + r.below(3);
+  for (int i = 0; i < lamps; ++i) {
+    Primitive lamp;
+    lamp.shape = Shape::ellipsoid;
+    lamp.a = floor_spot(700) + r.uniform(1800, 2700) * up;
+    const double rad = r.uniform(60, 200);
+    lamp.axes = Eigen::Vector3d(rad, rad, rad * r.uniform(0.5, 1.2)).asDiagonal();
+    lamp.material.albedo = lamp.material.albedo2 = float(r.uniform(0.85, 1.0));
+    out.push_back(lamp);
+  }
+}
+
 // Position along the wall of something moving at speed from phase, wrapping over span.
 double wrapped(double t_s, double speed, double phase, double span) {
   double s = std::fmod(phase + speed * t_s, span);
@@ -110,6 +162,16 @@ const char* light_name(LightLevel l) {
     case LightLevel::high: return "high";
     case LightLevel::medium: return "medium";
     case LightLevel::low: return "low";
+  }
+  return "?";
+}
+
+const char* camera_motion_name(int motion) {
+  switch (motion) {
+    case SceneConfig::still: return "still";
+    case SceneConfig::pan: return "pan";
+    case SceneConfig::shake: return "shake";
+    case SceneConfig::sweep: return "sweep";
   }
   return "?";
 }
@@ -207,6 +269,11 @@ Scene::Scene(const SceneConfig& config)
   static_.push_back(quad(floor0, 2 * half * right_, (behind + wall_mm_) * ahead_,
                          textured(wr, Pattern::checks, 300, 600, 0.25, 0.5, floor0, right_, ahead_)));
 
+  if (config.clutter) {
+    Rng crng(seed, kClutterStream);
+    add_clutter(crng, ahead_, right_, wall_mm_, config.distance_mm, static_);
+  }
+
   if (config.occluders) {
     Rng orng(seed, kOccluderStream);
     const double side = orng.uniform() < 0.5 ? -1 : 1;
@@ -285,6 +352,12 @@ Scene::Scene(const SceneConfig& config)
     for (auto& axis : wobble_) {
       axis[0] = {0.3 * kDeg, kTwoPi * mr.uniform(2, 4), mr.uniform(0, kTwoPi)};
       axis[1] = {0.2 * kDeg, kTwoPi * mr.uniform(5, 7), mr.uniform(0, kTwoPi)};
+    }
+  } else if (config.camera_motion == SceneConfig::sweep) {
+    const double amp_lo[3] = {1, 2, 0.3}, amp_hi[3] = {4, 8, 1.2};  // tilt, pan, roll (deg)
+    for (std::size_t a = 0; a < 3; ++a) {
+      wobble_[a][0] = {mr.uniform(amp_lo[a], amp_hi[a]) * kDeg, kTwoPi * mr.uniform(0.1, 0.5), mr.uniform(0, kTwoPi)};
+      wobble_[a][1] = {0.25 * mr.uniform(amp_lo[a], amp_hi[a]) * kDeg, kTwoPi * mr.uniform(0.6, 1.4), mr.uniform(0, kTwoPi)};
     }
   }
 }
@@ -414,7 +487,11 @@ std::string Scene::description() const {
                     : "static wall",
                 config_.occluders ? "box, pillar, crossing panel" : "none",
                 static_cast<unsigned long long>(config_.seed));
-  return buf;
+  // Only for scenes that have them, so the descriptions of earlier scenes keep their bytes.
+  std::string d = buf;
+  if (config_.clutter) d += "; a furnished room";
+  if (config_.camera_motion == SceneConfig::sweep) d += "; camera sweeping (hand-held)";
+  return d;
 }
 
 }  // namespace yelan::camera::sim

@@ -43,6 +43,7 @@ Vec3 camera_centre(const CameraModel& cam);
 
 enum class LightLevel { high, medium, low };
 const char* light_name(LightLevel l);
+const char* camera_motion_name(int motion);  // SceneConfig::CameraMotion: still|pan|shake|sweep
 // high ~ office (white facing the light = 255), medium 60, low 20 (a dim lamp: the pixel's
 // lin-log knee, where events thin out and noise dominates but a dancer still shows).
 // Flicker: 100 Hz ripple of depth 10% (high), 20% (medium), 30% (low).
@@ -67,8 +68,15 @@ struct SceneConfig {
   // every 8 s (a slow pan); shake is a hand-held tremor, about 0.5 deg at 2-7 Hz about every
   // axis (seeded). With a moving camera every frame is rendered whole, and the labels follow
   // the camera; a recording's /camera/M is the camera at rest.
-  enum CameraMotion { still, pan, shake };
+  // sweep: a hand-held camera looking around the room, 2-8 deg of pan and 1-4 of tilt at
+  // 0.1-0.5 Hz with a ripple of a quarter of that at 0.6-1.4 Hz: up to tens of deg/s, as a
+  // camera held while walking a room (pan turns 6 deg in 2 s, shake trembles by 0.5 deg).
+  enum CameraMotion { still, pan, shake, sweep };
   CameraMotion camera_motion = still;
+  // A furnished room instead of a bare wall: posters and shelves on the wall, cabinets and
+  // tables on the floor, poles and lamps, each seeded (a real room's clutter, which a bare
+  // sim room lacks; around the dancer's spot the floor stays clear).
+  bool clutter = false;
   std::uint64_t seed = 0;
   RenderOptions render;
 };

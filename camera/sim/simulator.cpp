@@ -286,7 +286,7 @@ std::string Simulator::description_json() const {
       {"distance_mm", sc.distance_mm},
       {"lighting", light_name(sc.light)},
       {"flicker", sc.flicker},
-      {"camera_motion", sc.camera_motion == SceneConfig::pan ? "pan" : sc.camera_motion == SceneConfig::shake ? "shake" : "still"},
+      {"camera_motion", camera_motion_name(sc.camera_motion)},
       {"background", sc.background == SceneConfig::dynamic ? "dynamic" : "static"},
       {"occluders", sc.occluders},
       {"seed", spec_.seed},
@@ -296,6 +296,7 @@ std::string Simulator::description_json() const {
       {"scene", scene_.description()}};
   // Only where it overrides the lighting's level, so the descriptions of other scenes keep their bytes.
   if (sc.light_dn && *sc.light_dn != lighting(sc.light, false).level) j["light_dn"] = *sc.light_dn;
+  if (sc.clutter) j["clutter"] = true;
   return j.dump();
 }
 

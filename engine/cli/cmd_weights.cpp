@@ -260,6 +260,24 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   run::RunOptions opt;
   opt.rate_hz = rate;
   if (beta) opt.beta = beta_v;
+  // Stage 1's cut first: presence is fitted on the share of the frame the cut mask covers.
+  std::optional<double> cut;
+  if (a.flag("--choose-mask-cut")) {
+    const std::vector<double> cuts = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6};
+    err << "choosing stage 1's cut on the recordings with a dancer (stage 1 on every tick, its mask against the true mask):\n";
+    out << std::defaultfloat << std::setprecision(3) << "mask cut sweep (IoU, stage 1 on every tick):";
+    double best = -1;
+    for (const double c : cuts) {
+      const double iou = run::sweep_beta(*w, recs, {1.01}, rate, seconds, skip, err, c).at(0).iou;
+      out << "  " << c << ": " << iou;
+      if (iou > best) best = iou, cut = c;
+    }
+    out << "\nchosen: run.mask_cut " << *cut << " (was " << before.mask_cut << ")\n";
+    opt.mask_cut = cut;
+    std::ostringstream cj;
+    cj << std::setprecision(9) << *cut;
+    wt.config_json = with_run_setting(wt.config_json, "mask_cut", cj.str());
+  }
   std::vector<std::pair<double, double>> depths;
   auto samples = run::presence_samples(*w, recs, opt, seconds + skip, skip, err, &depths);
   out << "before (" << (before.presence_calibrated ? "its calibration" : "the uncalibrated default") << ", a "
@@ -312,7 +330,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
     const double tol = a.number_or("--beta-tolerance", 0.02, 0, 1);
     const std::vector<double> betas = {0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.99, 1.01};
     err << "choosing beta on the recordings with a dancer (mask in use against the true mask):\n";
-    const auto points = run::sweep_beta(*w, recs, betas, rate, seconds, skip, err);
+    const auto points = run::sweep_beta(*w, recs, betas, rate, seconds, skip, err, cut);
     const run::BetaPoint pick = run::choose_beta(points, tol);
     out << std::defaultfloat << std::setprecision(3) << "beta sweep (stage 1 share of ticks, mask IoU):";
     for (const auto& p : points) out << "  " << p.beta << ": " << p.stage1_share << ", " << p.iou;
@@ -332,7 +350,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   }
   weights::save_weights(*o, wt);
   out << "wrote " << *o << " (config run.presence" << (depths.empty() ? "" : ", run.depth_scale")
-      << (chosen ? ", run.beta" : "") << ")\n";
+      << (chosen ? ", run.beta" : "") << (cut ? ", run.mask_cut" : "") << ")\n";
   return kOk;
 }
 
@@ -349,7 +367,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "init") return weights_init(rest, out);
     if (sub == "calibrate")
       return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta", "--beta-tolerance"},
-                            {"--choose-beta"}),
+                            {"--choose-beta", "--choose-mask-cut"}),
                        out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
   } catch (const weights::WeightsError& e) {

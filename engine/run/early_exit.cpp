@@ -11,7 +11,7 @@ namespace yelan::run {
 
 std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<std::string>& recordings,
                                   const std::vector<double>& betas, double rate_hz, double seconds, double skip_s,
-                                  std::ostream& progress) {
+                                  std::ostream& progress, std::optional<double> mask_cut) {
   std::vector<BetaPoint> out;
   for (const double beta : betas) {
     BetaPoint pt;
@@ -31,6 +31,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
       RunOptions opt;
       opt.rate_hz = rate_hz;
       opt.beta = beta;
+      opt.mask_cut = mask_cut;
       opt.tick_origin_us = info.mask_t.empty() ? 0 : info.mask_t[0];
       PosePipeline pipe(weights, W, H, opt);
       const int d = pipe.mask_downscale(), mw = W / d, mh = H / d;

@@ -4,6 +4,7 @@
 // with (its config's run.beta) is the one that runs stage 1 least while keeping the mask
 // IoU within a tolerance of stage 1 on every tick.
 #pragma once
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -24,9 +25,10 @@ struct BetaPoint {
 
 // One point per beta (in the order given), over at most `seconds` of each recording after
 // `skip_s` (the TORE filling).
+// mask_cut: stage 1's cut instead of the model's run.mask_cut.
 std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<std::string>& recordings,
                                   const std::vector<double>& betas, double rate_hz, double seconds, double skip_s,
-                                  std::ostream& progress);
+                                  std::ostream& progress, std::optional<double> mask_cut = std::nullopt);
 
 // The point with the smallest stage-1 share whose IoU is at least the best IoU of the sweep
 // minus `tolerance` (ties: the larger beta).

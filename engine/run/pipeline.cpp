@@ -113,6 +113,7 @@ struct PosePipeline::Impl {
     slot_share.resize(std::size_t(cfg.window));
     beta = o.beta >= 0 ? o.beta : cfg.run_beta;
     if (o.presence_ab) nets.cfg.presence_a = (*o.presence_ab)[0], nets.cfg.presence_b = (*o.presence_ab)[1];
+    if (o.mask_cut) nets.cfg.mask_cut = *o.mask_cut;
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
   }
@@ -232,7 +233,7 @@ struct PosePipeline::Impl {
       nets.mask.forward(unmasked.act);
       const layers::Act& m = nets.mask.masks();
       masks.resize(std::size_t(cfg.n_masks));
-      for (int c = 0; c < cfg.n_masks; ++c) input::mask_cut(m, 0, c, masks[std::size_t(c)]);
+      for (int c = 0; c < cfg.n_masks; ++c) input::mask_cut(m, 0, c, masks[std::size_t(c)], float(cfg.mask_cut));
       scores = nets.mask.scores();
       boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
       shares.assign(std::size_t(cfg.n_masks), 0.0f);

@@ -37,6 +37,8 @@ struct RunOptions {
   // P(person)'s {a, b} instead of the model's run.presence (calibrate refits under its fit:
   // the look-again rule reads the calibration, so the ticks depend on it).
   std::optional<std::array<double, 2>> presence_ab;
+  // Stage 1's sigmoid cut instead of the model's run.mask_cut (calibrate's sweep of cuts).
+  std::optional<double> mask_cut;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,

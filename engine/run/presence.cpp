@@ -100,9 +100,9 @@ PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
 
 namespace {
 // The simulator's condition words in a recording's name (yelan sim --dataset names files
-// SPLIT[-empty]-NNNNN-[who-clip-]VIEW-LIGHT-BACKGROUND[-occluded][-flicker][-pan|-shake]).
+// SPLIT[-empty|-room]-NNNNN-[who-clip-]VIEW-LIGHT-BACKGROUND[-occluded][-flicker][-clutter][-pan|-shake|-sweep]).
 std::vector<std::string> conditions_in(const std::string& name) {
-  static const char* const kWords[] = {"low", "medium", "high", "static", "dynamic", "occluded", "flicker", "pan", "shake"};
+  static const char* const kWords[] = {"low", "medium", "high", "static", "dynamic", "occluded", "flicker", "clutter", "pan", "shake", "sweep"};
   std::vector<std::string> out;
   std::size_t start = 0;
   while (start <= name.size()) {

@@ -124,7 +124,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     mask_net.forward(one_.act);
     std::vector<float> keep;
     for (int t = 0; t < S; ++t) {
-      input::mask_cut(mask_net.masks(), t, 0, keep);  // channel 0: the current mask
+      input::mask_cut(mask_net.masks(), t, 0, keep, float(cfg_.mask_cut));  // channel 0: the current mask
       input::apply_mask(in, used_ * S + t, keep);
     }
   }

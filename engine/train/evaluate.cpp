@@ -103,7 +103,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         };
         oracle.add(frame_error(swapped) < frame_error(pred) ? swapped : pred, b.truth_mm[std::size_t(t)], valid);
       }
-      // Stage 1 IoU: the current mask (binarised at 0.1) against the true mask, at the net's size.
+      // Stage 1 IoU: the current mask (binarised at the model's run.mask_cut) against the true
+      // mask, at the net's size.
       if (builder.source() == MaskSource::net) {
         const layers::Act& m = mask.masks();
         const int d = cfg.downscale;
@@ -111,7 +112,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         const double inter0 = inter, uni0 = uni;
         for (int t = 0; t < cfg.window; ++t) {
           const auto& truth = win.frames[std::size_t(t)].mask;
-          input::mask_cut(m, t, 0, keep);
+          input::mask_cut(m, t, 0, keep, float(cfg.mask_cut));
           for (int y = 0; y < m.h; ++y)
             for (int x = 0; x < m.w; ++x) {
               const bool pr = keep[std::size_t(y) * m.w + x] > 0;

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <span>
 #include <sstream>
@@ -220,4 +221,45 @@ TEST_CASE("dataset: a framed dancer faces the view at the start and stays in the
   }
   CHECK(valid_unframed / n < 0.8);
   CHECK(valid_framed / n > 0.95);
+}
+
+TEST_CASE("dataset: furnished rooms are seeded empty scenes, mostly filmed by a sweeping camera, and change no other member", "[sim]") {
+  const SimSpec a = dataset_room_member("train", 5, 1, 5.0), b = dataset_room_member("train", 5, 1, 5.0);
+  CHECK(a.name == b.name);
+  CHECK(a.seed == b.seed);
+  CHECK(a.name.rfind("train-room-00005-", 0) == 0);
+  CHECK(a.name.find("-clutter") != std::string::npos);
+  CHECK(dataset_room_member("train", 5, 2, 5.0).seed != a.seed);
+  CHECK(dataset_room_member("val", 5, 1, 5.0).seed != a.seed);
+  std::map<std::string, int> motions;
+  std::set<std::string> views;
+  for (int i = 0; i < 200; ++i) {
+    const SimSpec m = dataset_room_member("val", i, 1, 5.0);
+    CHECK_FALSE(m.dancer);
+    CHECK(m.scene.clutter);
+    CHECK(m.name.rfind("val-room-", 0) == 0);
+    ++motions[camera_motion_name(m.scene.camera_motion)];
+    views.insert(view_name(m.scene.view));
+    // Its name says how the camera moves, as the presence report reads it.
+    if (m.scene.camera_motion != SceneConfig::still)
+      CHECK(m.name.size() > m.name.rfind(std::string("-") + camera_motion_name(m.scene.camera_motion)));
+  }
+  CHECK(views.size() == 4);
+  CHECK(motions["sweep"] > 90);
+  CHECK(motions["still"] > 10);
+  CHECK(motions["pan"] > 10);
+  CHECK(motions["shake"] > 5);
+  // The older members keep their draws and names (rooms draw from their own stream).
+  CHECK(dataset_empty_member("train", 3, 1, 5.0).name.find("clutter") == std::string::npos);
+  CHECK(dataset_member("train", 3, 1, 5.0).name == dataset_member("train", 3, 1, 5.0).name);
+  // Presets and scene JSON reach both options; an unknown camera motion is refused.
+  const SimSpec p = preset_spec("front-high-static-clutter-sweep-empty");
+  CHECK(p.scene.clutter);
+  CHECK(p.scene.camera_motion == SceneConfig::sweep);
+  CHECK_FALSE(p.dancer);
+  const SimSpec j = spec_from_json(R"({"preset": "front-high-static", "clutter": true, "camera_motion": "sweep"})", "test");
+  CHECK(j.scene.clutter);
+  CHECK(j.scene.camera_motion == SceneConfig::sweep);
+  CHECK_THROWS_WITH(spec_from_json(R"({"preset": "front-high-static", "camera_motion": "orbit"})", "test"),
+                    Catch::Contains("still|pan|shake|sweep"));
 }

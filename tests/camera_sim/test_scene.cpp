@@ -310,3 +310,63 @@ TEST_CASE("render.scene camera motion: a still camera stays, pan sweeps about 6 
   CHECK((l.joints_mm[0] - still_label.joints_mm[0]).norm() > 1);  // the tremor moves the head in the camera frame
   CHECK((l.joints_mm[0] - still_label.joints_mm[0]).norm() < 80);
 }
+
+TEST_CASE("render.scene sweep: a hand-held camera looks around by degrees, tens of deg/s") {
+  SceneConfig c;
+  c.seed = 12;
+  c.camera_motion = SceneConfig::pan;
+  const Scene pan(c);
+  c.camera_motion = SceneConfig::sweep;
+  const Scene sweep(c), again(c);
+  const auto axis_angle_deg = [](const CameraModel& a, const CameraModel& b) {
+    const Vec3 za = a.M.block<1, 3>(2, 0).transpose(), zb = b.M.block<1, 3>(2, 0).transpose();
+    return std::acos(std::clamp(za.dot(zb), -1.0, 1.0)) * 180 / 3.141592653589793;
+  };
+  double widest = 0, fastest = 0;
+  for (double t = 0; t < 10; t += 0.01) {
+    widest = std::max(widest, axis_angle_deg(sweep.camera(), sweep.camera_at(t)));
+    fastest = std::max(fastest, axis_angle_deg(sweep.camera_at(t), sweep.camera_at(t + 0.01)) / 0.01);
+  }
+  CHECK(widest > 2);
+  CHECK(widest < 15);
+  CHECK(fastest > 5);   // deg/s: pan's 6 deg over 2 s is under 5
+  CHECK(fastest < 80);
+  CHECK(sweep.camera_image_speed() > 3 * pan.camera_image_speed());
+  CHECK(sweep.camera_at(3.7).M == again.camera_at(3.7).M);  // seeded
+  CHECK((camera_centre(sweep.camera_at(2)) - camera_centre(sweep.camera())).norm() < 1e-6);
+  CHECK(sweep.description().find("camera sweeping") != std::string::npos);
+  CHECK(pan.description().find("sweeping") == std::string::npos);
+  CHECK(std::string(camera_motion_name(SceneConfig::sweep)) == "sweep");
+}
+
+TEST_CASE("render.scene clutter furnishes the room, seeded, and leaves the dancer's spot clear") {
+  SceneConfig c;
+  c.seed = 21;
+  Scene bare(c);
+  c.clutter = true;
+  Scene room(c), same(c);
+  CHECK(room.static_primitives().size() >= bare.static_primitives().size() + 10);
+  CHECK(room.description().find("furnished room") != std::string::npos);
+  CHECK(bare.description().find("furnished") == std::string::npos);
+  RenderedFrame a, b, plain;
+  room.render(0.2, marked_body(0), a);
+  same.render(0.2, marked_body(0), b);
+  bare.render(0.2, marked_body(0), plain);
+  CHECK(a.intensity == b.intensity);
+  CHECK(a.intensity != plain.intensity);
+  // Nothing of the room hides the dancer: the marker shows as much as in the bare room.
+  CHECK(mask_count(a) == mask_count(plain));
+  CHECK(mask_count(a) > 100);
+  // Over many seeds and every view, nothing stands on the spot (1 m around the dancer).
+  for (std::uint64_t seed = 1; seed <= 40; ++seed) {
+    c.seed = seed;
+    c.view = View(seed % 4);
+    const Scene s(c);
+    for (const Primitive& p : s.static_primitives()) {
+      if (p.shape != Shape::quad || std::fabs(p.axes.col(2).z()) > 0.5) {  // a standing or round thing
+        const Vec3 foot = p.shape == Shape::quad ? Vec3(p.a + 0.5 * p.axes.col(0)) : p.a;
+        CHECK(Eigen::Vector2d(foot.x(), foot.y()).norm() > 500);
+      }
+    }
+  }
+}
