@@ -621,3 +621,23 @@ TEST_CASE("run: the chosen beta runs stage 1 least within the IoU tolerance", "[
   CHECK(yelan::run::choose_beta(pts, 1.0).beta == 0.5);
   CHECK_THROWS(yelan::run::choose_beta({}, 0.02));
 }
+
+#include "test_util.h"
+
+TEST_CASE("run: the shipped model finds nobody in the real DAVIS346 recording (a furnished room, a moving camera)", "[run][cli]") {
+  // Issue 16: a person on at most 5% of the ticks of this file, which has nobody in it.
+  const std::string file = yelan::test::shared_data_or_skip("events/aestream_davis.aedat4");
+  yelan::test::CliTempDir d("run-real");
+  for (const char* rate : {"50", "200"}) {
+    const auto r = run_cli({"run", "--weights", std::string(YELAN_SOURCE_DIR) + "/models/default.h5", file, "--rate", rate,
+                            "--out", d / "p.csv"});
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const auto rows = csv_rows(slurp(d / "p.csv"));
+    REQUIRE(rows.size() >= 6);  // 130 ms of events: 6 ticks at 50 per second, 25 at 200
+    int person = 0;
+    for (std::size_t i = 1; i < rows.size(); ++i) person += rows[i][42] == "1";
+    INFO(rate << " per second: a person on " << person << " of " << rows.size() - 1 << " ticks");
+    CHECK(person <= 0.05 * double(rows.size() - 1));
+  }
+}
