@@ -33,6 +33,13 @@ bool parse_background(const std::string& s, SceneConfig::Background& b) {
   return false;
 }
 
+// A camera motion by its name (camera_motion_name's inverse).
+bool parse_camera_motion(const std::string& s, SceneConfig::CameraMotion& m) {
+  for (const auto c : {SceneConfig::still, SceneConfig::pan, SceneConfig::shake, SceneConfig::sweep})
+    if (s == camera_motion_name(c)) return m = c, true;
+  return false;
+}
+
 [[noreturn]] void bad_preset(const std::string& name, const std::string& why) {
   throw std::invalid_argument("preset '" + name + "': " + why +
                               " (expected <character>-<motion>-<view>-<light>-<bg> or <view>-<light>-<bg>, "
@@ -56,15 +63,16 @@ SimSpec preset_spec(const std::string& name) {
   std::vector<std::string> parts = split(name, '-');
   SimSpec spec;
   spec.name = name;
+  // A still camera has no suffix: "still" is not one.
+  SceneConfig::CameraMotion motion;
   while (!parts.empty() && (parts.back() == "occluded" || parts.back() == "flicker" || parts.back() == "empty" ||
-                            parts.back() == "pan" || parts.back() == "shake" || parts.back() == "sweep" ||
-                            parts.back() == "clutter")) {
+                            parts.back() == "clutter" ||
+                            (parse_camera_motion(parts.back(), motion) && motion != SceneConfig::still))) {
     if (parts.back() == "empty") spec.dancer = false;
     else if (parts.back() == "clutter") spec.scene.clutter = true;
-    else if (parts.back() == "sweep") spec.scene.camera_motion = SceneConfig::sweep;
-    else if (parts.back() == "pan") spec.scene.camera_motion = SceneConfig::pan;
-    else if (parts.back() == "shake") spec.scene.camera_motion = SceneConfig::shake;
-    else (parts.back() == "occluded" ? spec.scene.occluders : spec.scene.flicker) = true;
+    else if (parts.back() == "occluded" || parts.back() == "flicker")
+      (parts.back() == "occluded" ? spec.scene.occluders : spec.scene.flicker) = true;
+    else spec.scene.camera_motion = motion;
     parts.pop_back();
   }
   if (parts.size() != 3 && parts.size() != 5) bad_preset(name, "wrong number of fields");
@@ -128,13 +136,8 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
       throw std::invalid_argument("background '" + v + "' is not static|dynamic");
     if (j.contains("occluders")) s.scene.occluders = j.at("occluders").get<bool>();
     if (j.contains("clutter")) s.scene.clutter = j.at("clutter").get<bool>();
-    if (j.contains("camera_motion")) {
-      const std::string m = j.at("camera_motion").get<std::string>();
-      int k = 0;
-      while (k < 4 && m != camera_motion_name(k)) ++k;
-      if (k == 4) throw std::invalid_argument("camera_motion '" + m + "' is not still|pan|shake|sweep");
-      s.scene.camera_motion = SceneConfig::CameraMotion(k);
-    }
+    if (j.contains("camera_motion") && !parse_camera_motion(v = j.at("camera_motion").get<std::string>(), s.scene.camera_motion))
+      throw std::invalid_argument("camera_motion '" + v + "' is not still|pan|shake|sweep");
     // One line per JSON key, as SPEC names them: a table of fields, deliberately spelled out.
     num(j, "duration_s", s.duration_s);
     if (j.contains("seed")) s.seed = j.at("seed").get<std::uint64_t>();
