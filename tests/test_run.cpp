@@ -610,7 +610,29 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(contains(run_cli({"weights", "inspect", d / "m.h5"}).out, "\"mask_cut\""));
 }
 
+#include "camera/sim/recording_reader.h"
 #include "engine/run/early_exit.h"
+
+TEST_CASE("run: one pass over stage 1's logits scores every mask cut as a pass per cut does", "[run]") {
+  yelan::test::CliTempDir d("cuts");
+  REQUIRE(run_cli({"sim", "--dataset", d / "ds", "--seed", "5", "--train", "0", "--val", "1", "--test", "0", "--val-empty",
+                   "1", "--duration", "0.6s", "--threads", "1"})
+              .code == 0);
+  const std::vector<std::string> recs = yelan::camera::sim::list_recordings(d / "ds/val");
+  REQUIRE(recs.size() == 2);  // the empty scene is left out of the IoU
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const std::vector<double> cuts = {0.1, 0.5, 0.9};
+  std::ostringstream progress;
+  const std::vector<double> one = yelan::run::sweep_mask_cuts(w, recs, cuts, 50, 0.4, 0.2, progress);
+  REQUIRE(one.size() == cuts.size());
+  for (std::size_t k = 0; k < cuts.size(); ++k) {
+    const auto per_cut = yelan::run::sweep_beta(w, recs, {1.01}, 50, 0.4, 0.2, progress, cuts[k]);
+    CHECK(one[k] == Approx(per_cut.at(0).iou).margin(1e-12));
+  }
+  CHECK(one[0] > 0.2);          // the shipped mask net finds this dancer
+  CHECK(one[0] != one[2]);      // and the cut changes what it covers
+  CHECK_THROWS_AS(yelan::run::sweep_mask_cuts(w, recs, {1.0}, 50, 0.4, 0.2, progress), std::invalid_argument);
+}
 
 TEST_CASE("run: the chosen beta runs stage 1 least within the IoU tolerance", "[run]") {
   using yelan::run::BetaPoint;

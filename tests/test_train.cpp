@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "cli_util.h"
 #include "engine/train/metrics.h"
 #include "engine/train/pose_norm.h"
@@ -447,4 +449,25 @@ TEST_CASE("train: SIGINT or SIGTERM writes a checkpoint at the step reached and 
     CHECK(r.code == 0);
     CHECK(yelan::test::contains(r.err, "at step " + std::to_string(reached)));
   }
+}
+
+TEST_CASE("train: eval --data says stage 1's IoU on the recordings with a dancer beside the pooled one", "[train][cli]") {
+  yelan::test::CliTempDir d("eval-people");
+  REQUIRE(yelan::test::run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
+  REQUIRE(yelan::test::run_cli({"sim", "--dataset", d / "ds", "--seed", "3", "--train", "0", "--val", "1", "--test", "0",
+                                "--val-empty", "1", "--duration", "0.6s", "--threads", "1"})
+              .code == 0);
+  const auto ev = yelan::test::run_cli({"eval", "--weights", d / "w.h5", "--data", d / "ds/val", "--seconds", "0.3",
+                                        "--no-floors", "--json", d / "e.json"});
+  INFO(ev.err);
+  REQUIRE(ev.code == 0);
+  CHECK(yelan::test::contains(ev.out, "(recordings with a dancer alone: "));
+  const auto j = nlohmann::json::parse(yelan::test::slurp(d / "e.json"));
+  const auto& people = j.at("mask_iou_by_condition").at("people");
+  REQUIRE(people.contains("dancer"));
+  // An untrained net draws a mask in the empty scene too: it never overlaps a true mask, so
+  // it scores 0 there and pulls the pooled figure under the dancers' own.
+  REQUIRE(people.contains("nobody"));
+  CHECK(people.at("nobody").get<double>() == 0);
+  CHECK(j.at("mask_iou").get<double>() < people.at("dancer").get<double>());
 }

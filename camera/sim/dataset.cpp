@@ -93,11 +93,17 @@ const std::vector<std::string>& dataset_characters(const std::string& split) {
   throw std::invalid_argument("dataset split '" + split + "': expected train, val or test");
 }
 
-SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s, bool random_looks,
-                       bool frame_dancer) {
+namespace {
+
+// A dancer of the split drawn from `stream` (the plain members': split_stream(split), looks
+// 0x100c), named <split>-[<kind>-]NNNNN-<who>-<motion>-<scene>. A furnished member draws its
+// camera's motion after everything else, from the same stream.
+SimSpec dancer_member(const std::string& split, int i, std::uint64_t seed, double duration_s, bool random_looks,
+                      bool frame_dancer, std::uint64_t stream, std::uint64_t looks_stream, const char* kind,
+                      bool furnished) {
   const std::vector<std::string>& cast = dataset_characters(split);
   const bool test = split == "test";
-  Rng r(hash64(seed, split_stream(split), std::uint64_t(i)), 0xda7a);
+  Rng r(hash64(seed, stream, std::uint64_t(i)), 0xda7a);
   SimSpec s;
   s.character = pick(r, cast);
   const std::vector<std::string>& clips = test ? test_motions() : train_motions();
@@ -115,14 +121,35 @@ SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, doub
   s.girth_scale = r.uniform(0.9, 1.12);
   if (r.uniform() < 0.3) s.clothing = Clothing(r.below(5));
   draw_scene(r, {25, 2800, 4600, 900, 1600, 0.4, 0.75, 0.5, 0.15, 0.15}, duration_s, s);
+  if (furnished) {
+    // A dance game's camera mostly stands on a shelf; some are held or knocked.
+    const double u = r.uniform();
+    s.scene.clutter = true;
+    s.scene.camera_motion = u < 0.4 ? SceneConfig::still : u < 0.55 ? SceneConfig::pan
+                          : u < 0.7 ? SceneConfig::shake : SceneConfig::sweep;
+  }
   // Its own stream, so the draws above stay what they were without random looks.
-  if (random_looks && split == "train") s.looks_seed = hash64(seed, 0x100c, std::uint64_t(i)) | 1;
+  if (random_looks && split == "train") s.looks_seed = hash64(seed, looks_stream, std::uint64_t(i)) | 1;
   s.frame_dancer = frame_dancer;
   std::ostringstream name;
-  name << split << "-" << std::setw(5) << std::setfill('0') << i << "-"
+  name << split << "-" << (*kind ? std::string(kind) + "-" : "") << std::setw(5) << std::setfill('0') << i << "-"
        << (s.looks_seed ? looks_name(s.looks_seed) : s.character) << "-" << s.motion << "-" << scene_suffix(s);
   s.name = name.str();
   return s;
+}
+
+}  // namespace
+
+SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, double duration_s, bool random_looks,
+                       bool frame_dancer) {
+  return dancer_member(split, i, seed, duration_s, random_looks, frame_dancer, split_stream(split), 0x100c, "", false);
+}
+
+SimSpec dataset_dancer_room_member(const std::string& split, int i, std::uint64_t seed, double duration_s,
+                                   bool random_looks, bool frame_dancer) {
+  dataset_characters(split);  // checks the split's name before its stream is derived
+  return dancer_member(split, i, seed, duration_s, random_looks, frame_dancer, split_stream(split) ^ 0xd007,
+                       0x100c ^ 0xd007, "dancer-room", true);
 }
 
 namespace {
@@ -166,8 +193,11 @@ std::string dataset_file_name(const SimSpec& spec) { return spec.name + ".yelan.
 int make_dataset(const DatasetSpec& d, std::ostream& err) {
   if (d.out_dir.empty()) throw std::invalid_argument("dataset: no output folder");
   if (d.train < 0 || d.val < 0 || d.test < 0 || d.train_empty < 0 || d.val_empty < 0 || d.test_empty < 0 ||
-      d.train_rooms < 0 || d.val_rooms < 0 || d.test_rooms < 0 ||
-      d.train + d.val + d.test + d.train_empty + d.val_empty + d.test_empty + d.train_rooms + d.val_rooms + d.test_rooms == 0)
+      d.train_rooms < 0 || d.val_rooms < 0 || d.test_rooms < 0 || d.train_dancer_rooms < 0 || d.val_dancer_rooms < 0 ||
+      d.test_dancer_rooms < 0 ||
+      d.train + d.val + d.test + d.train_empty + d.val_empty + d.test_empty + d.train_rooms + d.val_rooms + d.test_rooms +
+              d.train_dancer_rooms + d.val_dancer_rooms + d.test_dancer_rooms ==
+          0)
     throw std::invalid_argument("dataset: need a non-negative count per split, and at least one recording");
   if (!(d.duration_s >= 0.5 && d.duration_s <= 600)) throw std::invalid_argument("dataset: duration must be 0.5-600 s");
   if (d.low_light_dn && !(*d.low_light_dn > 0 && *d.low_light_dn <= 1e5))
@@ -209,6 +239,8 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"room_counts", {{"train", d.train_rooms}, {"val", d.val_rooms}, {"test", d.test_rooms}}},
+                                     {"dancer_room_counts",
+                                      {{"train", d.train_dancer_rooms}, {"val", d.val_dancer_rooms}, {"test", d.test_dancer_rooms}}},
                                      {"characters",
                                       {{"train", dataset_characters("train")},
                                        {"val", dataset_characters("val")},
@@ -232,6 +264,12 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     const int rooms = split == "train" ? d.train_rooms : split == "val" ? d.val_rooms : d.test_rooms;
     for (int i = 0; i < rooms; ++i) {
       Job j{split, dataset_room_member(split, i, d.seed, d.duration_s), ""};
+      j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
+      jobs.push_back(j);
+    }
+    const int dancer_rooms = split == "train" ? d.train_dancer_rooms : split == "val" ? d.val_dancer_rooms : d.test_dancer_rooms;
+    for (int i = 0; i < dancer_rooms; ++i) {
+      Job j{split, dataset_dancer_room_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

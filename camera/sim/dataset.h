@@ -32,6 +32,10 @@ struct DatasetSpec {
   // most of them filmed by a hand-held camera looking around: what a real room in front of a
   // moving event camera looks like (the empty scenes above are bare walls). Own seed stream.
   int train_rooms = 0, val_rooms = 0, test_rooms = 0;
+  // Dancers in furnished rooms (<split>-dancer-room-NNNNN-...-clutter[-pan|-shake|-sweep]):
+  // stage 1 must find the dancer among the furniture, not only tell a room from a dancer.
+  // Drawn as the dancer members are (cast, segments, looks, framing), from their own stream.
+  int train_dancer_rooms = 0, val_dancer_rooms = 0, test_dancer_rooms = 0;
   double duration_s = 5;
   // Training recordings each get new looks (random_looks: body, garment, hair, every
   // material) instead of a cast member's; validation and test keep their held-out cast.
@@ -57,6 +61,8 @@ SimSpec dataset_member(const std::string& split, int i, std::uint64_t seed, doub
                        bool random_looks = false, bool frame_dancer = false);
 SimSpec dataset_empty_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
 SimSpec dataset_room_member(const std::string& split, int i, std::uint64_t seed, double duration_s);
+SimSpec dataset_dancer_room_member(const std::string& split, int i, std::uint64_t seed, double duration_s,
+                                   bool random_looks = false, bool frame_dancer = false);
 std::string dataset_file_name(const SimSpec& spec);
 
 // Simulates what is missing, in parallel, and writes the manifest (every member's scene as

@@ -171,6 +171,9 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   d.train_rooms = a.int_value_or("--train-rooms", 0, 0, 1 << 20);
   d.val_rooms = a.int_value_or("--val-rooms", 0, 0, 1 << 20);
   d.test_rooms = a.int_value_or("--test-rooms", 0, 0, 1 << 20);
+  d.train_dancer_rooms = a.int_value_or("--train-dancer-rooms", 0, 0, 1 << 20);
+  d.val_dancer_rooms = a.int_value_or("--val-dancer-rooms", 0, 0, 1 << 20);
+  d.test_dancer_rooms = a.int_value_or("--test-dancer-rooms", 0, 0, 1 << 20);
   d.duration_s = parse_duration_s(a.value_or("--duration", "5s"));
   d.random_looks = a.flag("--random-looks");
   d.frame_dancer = a.flag("--frame-dancer");
@@ -180,7 +183,8 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   try {
     const auto t0 = std::chrono::steady_clock::now();
     const int made = sim::make_dataset(d, err);
-    out << dir << ": " << d.train << " train, " << d.val << " val, " << d.test << " test recordings and "
+    out << dir << ": " << d.train << " train, " << d.val << " val, " << d.test << " test recordings, "
+        << d.train_dancer_rooms + d.val_dancer_rooms + d.test_dancer_rooms << " dancers in furnished rooms and "
         << d.train_empty + d.val_empty + d.test_empty + d.train_rooms + d.val_rooms + d.test_rooms << " without a dancer (" << made
         << " simulated now in " << std::llround(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count())
         << " s), manifest " << (std::filesystem::path(dir) / "manifest.json").string() << "\n";
@@ -215,7 +219,8 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
                {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
                 "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes",
                 "--dataset", "--train", "--val", "--test", "--train-empty", "--val-empty", "--test-empty", "--low-light-dn",
-                "--train-rooms", "--val-rooms", "--test-rooms"},
+                "--train-rooms", "--val-rooms", "--test-rooms", "--train-dancer-rooms", "--val-dancer-rooms",
+                "--test-dancer-rooms"},
                {"--list", "--quiet", "--force", "--random-looks", "--frame-dancer"});
   a.expect_positionals(0, 0);
   if (a.value("--threads")) omp_set_num_threads(a.int_value_or("--threads", 1, 1, 256));

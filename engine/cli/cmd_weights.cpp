@@ -266,11 +266,11 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
     const std::vector<double> cuts = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6};
     err << "choosing stage 1's cut on the recordings with a dancer (stage 1 on every tick, its mask against the true mask):\n";
     out << std::defaultfloat << std::setprecision(3) << "mask cut sweep (IoU, stage 1 on every tick):";
+    const std::vector<double> ious = run::sweep_mask_cuts(*w, recs, cuts, rate, seconds, skip, err);
     double best = -1;
-    for (const double c : cuts) {
-      const double iou = run::sweep_beta(*w, recs, {1.01}, rate, seconds, skip, err, c).at(0).iou;
-      out << "  " << c << ": " << iou;
-      if (iou > best) best = iou, cut = c;
+    for (std::size_t k = 0; k < cuts.size(); ++k) {
+      out << "  " << cuts[k] << ": " << ious[k];
+      if (ious[k] > best) best = ious[k], cut = cuts[k];
     }
     out << "\nchosen: run.mask_cut " << *cut << " (was " << before.mask_cut << ")\n";
     opt.mask_cut = cut;

@@ -2,12 +2,51 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "camera/sim/recording_windows.h"
 #include "engine/run/pipeline.h"
 
 namespace yelan::run {
+
+namespace {
+
+// A dancer recording's true masks over [skip_s, skip_s + seconds] after its first event.
+struct TrueMasks {
+  camera::sim::RecordingInfo info;
+  std::int64_t t0 = 0, end = 0;
+  std::size_t m0 = 0, m1 = 0;
+  std::vector<std::uint8_t> masks;
+
+  TrueMasks(const std::string& path, double seconds, double skip_s) : info(camera::sim::read_recording_info(path)) {
+    if (!info.dancer) return;
+    t0 = info.first_event_us + std::llround(skip_s * 1e6);
+    end = info.first_event_us + std::llround((skip_s + seconds) * 1e6);
+    m0 = std::size_t(std::lower_bound(info.mask_t.begin(), info.mask_t.end(), t0) - info.mask_t.begin());
+    m1 = std::size_t(std::upper_bound(info.mask_t.begin(), info.mask_t.end(), end) - info.mask_t.begin());
+    masks = camera::sim::read_recording_masks(path, m0, m1 - m0);
+  }
+  // The index (into info.mask_t) of the true mask at tick t_us: ticks sit on the mask times.
+  std::optional<std::size_t> index_at(std::int64_t t_us) const {
+    const auto b = info.mask_t.begin();
+    const auto it = std::lower_bound(b + std::ptrdiff_t(m0), b + std::ptrdiff_t(m1), t_us);
+    if (it == b + std::ptrdiff_t(m1) || std::llabs(*it - t_us) > 1000) return std::nullopt;
+    return std::size_t(it - b);
+  }
+  const std::uint8_t* mask(std::size_t index) const {
+    return &masks[(index - m0) * std::size_t(info.camera.width) * std::size_t(info.camera.height)];
+  }
+  RunOptions options(double rate_hz, double beta) const {
+    RunOptions opt;
+    opt.rate_hz = rate_hz;
+    opt.beta = beta;
+    opt.tick_origin_us = info.mask_t.empty() ? 0 : info.mask_t[0];
+    return opt;
+  }
+};
+
+}  // namespace
 
 std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<std::string>& recordings,
                                   const std::vector<double>& betas, double rate_hz, double seconds, double skip_s,
@@ -20,36 +59,26 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
     std::uint64_t mask_runs = 0, with_events = 0;
     double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, sad = 0;
     for (const std::string& path : recordings) {
-      const camera::sim::RecordingInfo info = camera::sim::read_recording_info(path);
-      if (!info.dancer) continue;
-      const int W = info.camera.width, H = info.camera.height;
-      const std::int64_t t0 = info.first_event_us + std::llround(skip_s * 1e6);
-      const std::int64_t end = info.first_event_us + std::llround((skip_s + seconds) * 1e6);
-      const std::size_t m0 = std::size_t(std::lower_bound(info.mask_t.begin(), info.mask_t.end(), t0) - info.mask_t.begin());
-      const std::size_t m1 = std::size_t(std::upper_bound(info.mask_t.begin(), info.mask_t.end(), end) - info.mask_t.begin());
-      const std::vector<std::uint8_t> truth = camera::sim::read_recording_masks(path, m0, m1 - m0);
-      RunOptions opt;
-      opt.rate_hz = rate_hz;
-      opt.beta = beta;
+      const TrueMasks tm(path, seconds, skip_s);
+      if (!tm.info.dancer) continue;
+      const int W = tm.info.camera.width;
+      RunOptions opt = tm.options(rate_hz, beta);
       opt.mask_cut = mask_cut;
-      opt.tick_origin_us = info.mask_t.empty() ? 0 : info.mask_t[0];
-      PosePipeline pipe(weights, W, H, opt);
-      const int d = pipe.mask_downscale(), mw = W / d, mh = H / d;
+      PosePipeline pipe(weights, W, tm.info.camera.height, opt);
+      const int d = pipe.mask_downscale(), mw = W / d, mh = tm.info.camera.height / d;
       const auto score = [&](const Pose& p) {
-        if (p.t_us < t0 || p.stale) return;
-        // The true mask at the tick (ticks sit on the mask times).
-        const auto it = std::lower_bound(info.mask_t.begin() + std::ptrdiff_t(m0), info.mask_t.begin() + std::ptrdiff_t(m1), p.t_us);
-        if (it == info.mask_t.begin() + std::ptrdiff_t(m1) || std::llabs(*it - p.t_us) > 1000) return;
-        const std::uint8_t* tm = &truth[std::size_t(it - info.mask_t.begin() - std::ptrdiff_t(m0)) * std::size_t(W) * H];
+        if (p.t_us < tm.t0 || p.stale) return;
+        const auto here = tm.index_at(p.t_us);
+        if (!here) return;
+        const std::uint8_t* truth = tm.mask(*here);
         const std::vector<float>& pm = pipe.last_mask();
         if (pm.size() != std::size_t(mw) * mh) return;
         // Stage 1 ran here: each future mask's score against its true quality.
         if (p.mask_ran) {
           const auto& masks = pipe.stored_masks();
           const auto& scores = pipe.stored_scores();
-          const std::size_t here = std::size_t(it - info.mask_t.begin());
-          for (std::size_t k = 0; k < masks.size() && k < scores.size() && here + k < m1; ++k) {
-            const std::uint8_t* fm = &truth[(here + k - m0) * std::size_t(W) * H];
+          for (std::size_t k = 0; k < masks.size() && k < scores.size() && *here + k < tm.m1; ++k) {
+            const std::uint8_t* fm = tm.mask(*here + k);
             double wrong = 0;
             for (int y = 0; y < mh; ++y)
               for (int x = 0; x < mw; ++x)
@@ -62,13 +91,13 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
         for (int y = 0; y < mh; ++y)
           for (int x = 0; x < mw; ++x) {
             const bool pr = pm[std::size_t(y) * mw + x] > 0;
-            const bool tr = tm[std::size_t(y * d + d / 2) * W + x * d + d / 2] != 0;
+            const bool tr = truth[std::size_t(y * d + d / 2) * W + x * d + d / 2] != 0;
             inter += pr && tr;
             uni += pr || tr;
           }
         ++pt.ticks;
       };
-      run_file(pipe, path, end, score);
+      run_file(pipe, path, tm.end, score);
       mask_runs += pipe.stats().mask_runs;
       with_events += pipe.stats().ticks - pipe.stats().stale;
     }
@@ -85,6 +114,53 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
     out.push_back(pt);
   }
   return out;
+}
+
+std::vector<double> sweep_mask_cuts(const std::string& weights, const std::vector<std::string>& recordings,
+                                    const std::vector<double>& cuts, double rate_hz, double seconds, double skip_s,
+                                    std::ostream& progress) {
+  std::vector<float> logit_cuts;
+  for (const double c : cuts) {
+    if (!(c > 0 && c < 1)) throw std::invalid_argument("sweep_mask_cuts: a cut must lie in (0, 1)");
+    logit_cuts.push_back(float(std::log(c / (1 - c))));
+  }
+  std::vector<double> inter(cuts.size(), 0), uni(cuts.size(), 0);
+  std::uint64_t ticks = 0;
+  for (const std::string& path : recordings) {
+    const TrueMasks tm(path, seconds, skip_s);
+    if (!tm.info.dancer) continue;
+    const int W = tm.info.camera.width;
+    // Stage 1 on every tick: the mask in use is always this tick's.
+    PosePipeline pipe(weights, W, tm.info.camera.height, tm.options(rate_hz, 1.01));
+    const int d = pipe.mask_downscale(), mw = W / d, mh = tm.info.camera.height / d;
+    run_file(pipe, path, tm.end, [&](const Pose& p) {
+      if (p.t_us < tm.t0 || p.stale || !p.mask_ran) return;
+      const auto here = tm.index_at(p.t_us);
+      if (!here) return;
+      const std::uint8_t* truth = tm.mask(*here);
+      const std::vector<float>& lg = pipe.stage1_logits();
+      if (lg.size() != std::size_t(mw) * mh) return;
+      for (int y = 0; y < mh; ++y)
+        for (int x = 0; x < mw; ++x) {
+          const float v = lg[std::size_t(y) * mw + x];
+          const bool tr = truth[std::size_t(y * d + d / 2) * W + x * d + d / 2] != 0;
+          for (std::size_t k = 0; k < cuts.size(); ++k) {
+            const bool pr = v > logit_cuts[k];
+            inter[k] += pr && tr;
+            uni[k] += pr || tr;
+          }
+        }
+      ++ticks;
+    });
+  }
+  std::vector<double> iou(cuts.size());
+  progress << "  stage 1 on every tick, " << ticks << " ticks: IoU";
+  for (std::size_t k = 0; k < cuts.size(); ++k) {
+    iou[k] = uni[k] > 0 ? inter[k] / uni[k] : 0;
+    progress << " " << cuts[k] << ": " << iou[k];
+  }
+  progress << "\n";
+  return iou;
 }
 
 BetaPoint choose_beta(const std::vector<BetaPoint>& points, double tolerance) {

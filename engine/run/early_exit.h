@@ -30,6 +30,13 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
                                   const std::vector<double>& betas, double rate_hz, double seconds, double skip_s,
                                   std::ostream& progress, std::optional<double> mask_cut = std::nullopt);
 
+// Stage 1's mask IoU at each cut (sigmoid > cut, in the order given) with stage 1 on every
+// tick, the same ticks and pooling as sweep_beta at beta 1.01 with that cut, in one pass
+// over the recordings: every cut is applied to the same logits.
+std::vector<double> sweep_mask_cuts(const std::string& weights, const std::vector<std::string>& recordings,
+                                    const std::vector<double>& cuts, double rate_hz, double seconds, double skip_s,
+                                    std::ostream& progress);
+
 // The point with the smallest stage-1 share whose IoU is at least the best IoU of the sweep
 // minus `tolerance` (ties: the larger beta).
 BetaPoint choose_beta(const std::vector<BetaPoint>& points, double tolerance);

@@ -263,3 +263,45 @@ TEST_CASE("dataset: furnished rooms are seeded empty scenes, mostly filmed by a 
   CHECK_THROWS_WITH(spec_from_json(R"({"preset": "front-high-static", "camera_motion": "orbit"})", "test"),
                     Catch::Contains("still|pan|shake|sweep"));
 }
+
+TEST_CASE("dataset: dancers in furnished rooms are drawn as dancers, from their own stream, and change no other member", "[sim]") {
+  std::map<std::string, int> motions;
+  std::set<std::string> views;
+  int val_segment = 0;
+  for (int i = 0; i < 200; ++i) {
+    const SimSpec m = dataset_dancer_room_member("val", i, 1, 5.0, true, true);
+    CHECK(m.dancer);
+    CHECK(m.scene.clutter);
+    CHECK(m.frame_dancer);
+    CHECK(m.name.rfind("val-dancer-room-" + std::string(i < 10 ? "0000" : i < 100 ? "000" : "00") + std::to_string(i) + "-", 0) == 0);
+    CHECK(m.name.find("-clutter") != std::string::npos);
+    // Validation keeps its held-out cast and the clips' last 15%.
+    CHECK((m.character == "hana" || m.character == "eli"));
+    CHECK(m.looks_seed == 0);
+    if (m.motion != "dance") {
+      CHECK(m.motion_begin == Approx(0.85));
+      ++val_segment;
+    }
+    ++motions[camera_motion_name(m.scene.camera_motion)];
+    views.insert(view_name(m.scene.view));
+  }
+  CHECK(val_segment > 100);
+  CHECK(views.size() == 4);
+  CHECK(motions["still"] > 50);
+  CHECK(motions["sweep"] > 30);
+  CHECK(motions["pan"] > 10);
+  CHECK(motions["shake"] > 10);
+  // Training dancers in rooms get new looks and the clips' first 85%; seeded.
+  const SimSpec a = dataset_dancer_room_member("train", 7, 1, 5.0, true, true);
+  CHECK(a.name == dataset_dancer_room_member("train", 7, 1, 5.0, true, true).name);
+  CHECK(a.looks_seed != 0);
+  CHECK(a.name.rfind("train-dancer-room-00007-r", 0) == 0);
+  CHECK(dataset_dancer_room_member("train", 7, 2, 5.0, true, true).seed != a.seed);
+  // Their own stream: neither the scene nor the person is the plain member's of the same index.
+  const SimSpec plain = dataset_member("train", 7, 1, 5.0, true, true);
+  CHECK(plain.seed != a.seed);
+  CHECK(plain.looks_seed != a.looks_seed);
+  CHECK_FALSE(plain.scene.clutter);
+  CHECK(plain.name.rfind("train-00007-", 0) == 0);
+  CHECK_THROWS_AS(dataset_dancer_room_member("dev", 0, 1, 5.0), std::invalid_argument);
+}
