@@ -580,6 +580,19 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(j.at("empty_poses").get<int>() >= 10);
   CHECK(j.at("deployed").at("frames").get<int>() >= 5);
   CHECK(j.at("head_depth_ratio_median").get<double>() == Approx(1).margin(0.1));
+  // Presence by the conditions in the names: the dancer's ticks and the empty scene's apart,
+  // the empty scene's as many as the poses counted above.
+  CHECK(contains(ev.out, "presence by the conditions in the recordings' names"));
+  std::uint64_t empty_ticks = 0, dancer_ticks = 0;
+  for (const auto& [word, c] : j.at("presence_by_condition").items()) {
+    if (word == "high" || word == "medium" || word == "low") {
+      empty_ticks += c.at("empty_ticks").get<std::uint64_t>();
+      dancer_ticks += c.at("dancer_ticks").get<std::uint64_t>();
+    }
+    CHECK(c.at("empty_called_person").get<std::uint64_t>() <= c.at("empty_ticks").get<std::uint64_t>());
+  }
+  CHECK(empty_ticks == j.at("empty_poses").get<std::uint64_t>());
+  CHECK(dancer_ticks > 0);
   // The tensors are untouched; the output must differ from the input and not be it.
   CHECK(run_cli({"weights", "diff", d / "w.h5", d / "c.h5"}).code == 0);
   CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "w.h5"}).code == 2);

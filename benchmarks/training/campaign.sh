@@ -211,7 +211,7 @@ case "$what" in
   # Stage 1 again, from the shipped mask net (MASK_S5_INIT: `git show c367f95:models/default.h5`,
   # whose mask net is mask-s4's final step) on ds-s5: rooms and dancers among furniture.
   train-mask-s5)
-    DATA=$DATA_S5 BATCH=32 train mask mask-s5 "${MASK_S5_STEPS:-800}" --lr 3e-4 --mask-frames 1 \
+    DATA=$DATA_S5 BATCH=32 train mask mask-s5 "${MASK_S5_STEPS:-500}" --lr 3e-4 --mask-frames 1 \
       --init "${MASK_S5_INIT:-models/default.h5}" ;;
   # Can the shipped pose net fit 16 recordings? Every 12th dancer recording of ds-s3's
   # training split (16), trained and validated on the same 16 from the shipped net, lr 1e-3

@@ -5,6 +5,8 @@
 #include <iomanip>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "camera/io/event_writer.h"
 #include "camera/sim/presets.h"
 #include "camera/sim/recording_windows.h"
@@ -27,6 +29,15 @@ namespace {
 // everything so far, stage 1 with the model's early exit, its own depth from the body-height
 // prior), each pose scored against the label at its time; root-aligned is the figure to
 // compare with eval's root-aligned one.
+// {"low": {"dancer_ticks": N, "dancer_called_person": N, "empty_ticks": N, "empty_called_person": N}, ...}
+std::string presence_json(const std::map<std::string, run::PresenceReport::Condition>& by_condition) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const auto& [name, c] : by_condition)
+    j[name] = {{"dancer_ticks", c.person_ticks}, {"dancer_called_person", c.person_called}, {"empty_ticks", c.empty_ticks},
+               {"empty_called_person", c.empty_called}};
+  return j.dump();
+}
+
 int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
@@ -62,6 +73,10 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     t << "; on " << 100.0 * double(r.empty_called_person) / double(r.empty_poses) << "% of the " << r.empty_poses
       << " poses of scenes with nobody";
   t << "\n";
+  if (!r.presence_by_condition.empty()) {
+    t << "presence by the conditions in the recordings' names (every pose in the span):\n";
+    run::print_presence_by_condition(r.presence_by_condition, t);
+  }
   out << t.str();
   if (const auto j = a.value("--json"))
     camera::write_file_atomically(*j, "{\"deployed\": " + train::pose_scores_json(r.deployed) + ", \"paper\": " +
@@ -73,7 +88,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              ", \"empty_poses\": " + std::to_string(r.empty_poses) +
                              ", \"empty_called_person\": " + std::to_string(r.empty_called_person) +
                              ", \"head_depth_abs_error_mm\": " + std::to_string(r.depth_abs_error_mm) +
-                             ", \"head_depth_ratio_median\": " + std::to_string(r.depth_ratio_median) + "}\n");
+                             ", \"head_depth_ratio_median\": " + std::to_string(r.depth_ratio_median) +
+                             ", \"presence_by_condition\": " + presence_json(r.presence_by_condition) + "}\n");
   return kOk;
 }
 

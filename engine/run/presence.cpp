@@ -98,9 +98,6 @@ PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
   return f;
 }
 
-namespace {
-// The simulator's condition words in a recording's name (yelan sim --dataset names files
-// SPLIT[-empty|-room]-NNNNN-[who-clip-]VIEW-LIGHT-BACKGROUND[-occluded][-flicker][-clutter][-pan|-shake|-sweep]).
 std::vector<std::string> conditions_in(const std::string& name) {
   static const char* const kWords[] = {"low", "medium", "high", "static", "dynamic", "occluded", "flicker", "clutter", "pan", "shake", "sweep"};
   std::vector<std::string> out;
@@ -114,7 +111,15 @@ std::vector<std::string> conditions_in(const std::string& name) {
   }
   return out;
 }
-}  // namespace
+
+void count_by_condition(std::map<std::string, PresenceReport::Condition>& by_condition, const std::string& recording,
+                        bool person, bool called) {
+  for (const std::string& c : conditions_in(recording)) {
+    auto& k = by_condition[c];
+    (person ? k.person_ticks : k.empty_ticks) += 1;
+    (person ? k.person_called : k.empty_called) += called;
+  }
+}
 
 PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold) {
   PresenceReport r;
@@ -129,11 +134,7 @@ PresenceReport presence_report(const std::vector<PresenceSample>& samples, doubl
     const double p = presence_probability(s.share, a, b), w = s.person ? w_pos : w_neg;
     const bool called = p >= threshold;
     (s.person ? hits : alarms) += called;
-    for (const std::string& c : conditions_in(s.recording)) {
-      auto& k = r.by_condition[c];
-      (s.person ? k.person_ticks : k.empty_ticks) += 1;
-      (s.person ? k.person_called : k.empty_called) += called;
-    }
+    count_by_condition(r.by_condition, s.recording, s.person, called);
     const std::size_t k = std::size_t(std::min(9, int(p * 10)));
     ++r.bins[k].n;
     weight[k] += w;
@@ -164,9 +165,13 @@ void print_presence_report(const PresenceReport& r, std::ostream& out) {
     if (r.bins[i].n)
       out << "    " << std::setprecision(1) << double(i) / 10 << "-" << double(i + 1) / 10 << ": " << r.bins[i].n << ", "
           << std::setprecision(3) << r.bins[i].predicted << ", " << r.bins[i].observed << "\n";
-  if (r.by_condition.empty()) return;
-  out << "  by condition (dancer ticks called person; empty ticks called person):\n";
-  for (const auto& [name, c] : r.by_condition) {
+  print_presence_by_condition(r.by_condition, out);
+}
+
+void print_presence_by_condition(const std::map<std::string, PresenceReport::Condition>& by_condition, std::ostream& out) {
+  if (by_condition.empty()) return;
+  out << std::fixed << "  by condition (dancer ticks called person; empty ticks called person):\n";
+  for (const auto& [name, c] : by_condition) {
     out << "    " << std::left << std::setw(9) << name << std::right << std::setprecision(1);
     if (c.person_ticks) out << " dancer " << 100 * double(c.person_called) / double(c.person_ticks) << "% of " << c.person_ticks;
     else out << " dancer -";

@@ -77,6 +77,16 @@ struct PresenceReport {
 PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold);
 void print_presence_report(const PresenceReport& r, std::ostream& out);
 
+// The simulator's condition words in a recording's name (yelan sim --dataset names files
+// SPLIT[-empty|-room|-dancer-room]-NNNNN-[who-clip-]VIEW-LIGHT-BACKGROUND[-occluded][-flicker]
+// [-clutter][-pan|-shake|-sweep]): low, static, clutter, sweep, ...
+std::vector<std::string> conditions_in(const std::string& name);
+// One tick's verdict counted under each condition its recording's name says.
+void count_by_condition(std::map<std::string, PresenceReport::Condition>& by_condition, const std::string& recording,
+                        bool person, bool called);
+// "    low       dancer 99.0% of 300; empty 2.0% of 100" per condition.
+void print_presence_by_condition(const std::map<std::string, PresenceReport::Condition>& by_condition, std::ostream& out);
+
 // Ticks of the recordings (*.yelan.h5, dancer or empty scenes) run through the pipeline as
 // `yelan run` does with options `run` (ticks at run.rate_hz from time 0, its early exit), at
 // most `seconds` of each; the first `skip_s` (the TORE still filling) are left out. head_depths, when given,

@@ -158,7 +158,10 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     sc.r.wall_s += run_file(pipe, recordings[i], end_us, keep);
     sim::Joints13 joints;
     std::array<std::uint8_t, sim::kJointCount> valid{};
+    std::uint64_t called = 0;
     for (const Pose& p : poses) {
+      count_by_condition(sc.r.presence_by_condition, info.name, info.dancer, p.person);
+      called += p.person;
       if (!info.dancer) {
         ++sc.r.empty_poses;
         sc.r.empty_called_person += p.person;
@@ -169,7 +172,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     }
     sc.add_run(pipe.stats());
     progress << "  [" << (i + 1) << "/" << recordings.size() << "] " << info.name << (info.dancer ? "" : " (empty)") << ": "
-             << poses.size() << " poses\n";
+             << poses.size() << " poses, " << called << " said person\n";
   }
   return sc.result();
 }

@@ -12,6 +12,7 @@
 
 #include "camera/sim/simulator.h"
 #include "engine/run/pipeline.h"
+#include "engine/run/presence.h"
 #include "engine/train/metrics.h"
 
 namespace yelan::run {
@@ -44,6 +45,9 @@ struct StreamEvalResult {
   double depth_ratio_median = 0, depth_abs_error_mm = 0;
   // Recordings without a dancer (evaluate_recordings): their poses and those that said person.
   std::uint64_t empty_poses = 0, empty_called_person = 0;
+  // Every pose's verdict under the conditions its recording's name says (evaluate_recordings):
+  // dancer recordings count all their poses in the span, the dancer in the picture or not.
+  std::map<std::string, PresenceReport::Condition> presence_by_condition;
 };
 
 StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,
