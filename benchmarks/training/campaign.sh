@@ -81,7 +81,7 @@ dataset_s4() {
 dataset_s5() {
   link_splits "$DATA_S4" "$DATA_S5"
   "$Y" sim --dataset "$DATA_S5" --seed 1 --train "${LOOKS_TRAIN:-200}" --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
-    --random-looks --frame-dancer --train-rooms 64 --val-rooms 16 --train-dancer-rooms 40 --val-dancer-rooms 8 \
+    --random-looks --frame-dancer --train-rooms 64 --val-rooms 16 --train-dancer-rooms 24 --val-dancer-rooms 8 \
     --threads "${THREADS:-2}"
 }
 

@@ -123,7 +123,11 @@ const std::vector<Command>& commands() {
        "every event so far, stage 1 with early exit, depth from the body-height prior), each\n"
        "pose against the label at its time; JSON: deployed and paper (true head depth) scores,\n"
        "the deployed head depth's error, presence. With --data: each recording from its first\n"
-       "event, its first --skip s (0.5) not scored; empty scenes count the poses saying person.\n",
+       "event, its first --skip s (0.5) not scored; empty scenes count the poses saying person,\n"
+       "and presence_by_condition splits every pose's verdict by the condition words in the\n"
+       "recordings' names (low, dynamic, clutter, sweep, ...), dancer and empty scenes apart.\n"
+       "Mask IoU (without --run) is pooled over every recording, a mask drawn where nobody is\n"
+       "counting against it; mask_iou_by_condition.people.dancer is the dancers' alone.\n",
        cmd_eval, "evaluation (issue 7)"},
       {"convert", "convert an event file between formats",
        "usage: yelan convert IN OUT [--camera N]\n"
