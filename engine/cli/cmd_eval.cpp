@@ -25,10 +25,6 @@ std::vector<camera::sim::SimSpec> scenes_from(const std::string& text);  // cmd_
 
 namespace {
 
-// The deployed path: `yelan run`'s pipeline on the test scenes (events in time order, TORE of
-// everything so far, stage 1 with the model's early exit, its own depth from the body-height
-// prior), each pose scored against the label at its time; root-aligned is the figure to
-// compare with eval's root-aligned one.
 // {"low": {"dancer_ticks": N, "dancer_called_person": N, "empty_ticks": N, "empty_called_person": N}, ...}
 std::string presence_json(const std::map<std::string, run::PresenceReport::Condition>& by_condition) {
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
@@ -38,6 +34,10 @@ std::string presence_json(const std::map<std::string, run::PresenceReport::Condi
   return j.dump();
 }
 
+// The deployed path: `yelan run`'s pipeline on the test scenes (events in time order, TORE of
+// everything so far, stage 1 with the model's early exit, its own depth from the body-height
+// prior), each pose scored against the label at its time; root-aligned is the figure to
+// compare with eval's root-aligned one.
 int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
