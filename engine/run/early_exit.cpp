@@ -138,11 +138,11 @@ std::vector<double> sweep_mask_cuts(const std::string& weights, const std::vecto
       const auto here = tm.index_at(p.t_us);
       if (!here) return;
       const std::uint8_t* truth = tm.mask(*here);
-      const std::vector<float>& lg = pipe.stage1_logits();
-      if (lg.size() != std::size_t(mw) * mh) return;
+      const layers::Act& lg = pipe.stage1_logits();
+      if (lg.w != mw || lg.h != mh) return;
       for (int y = 0; y < mh; ++y)
         for (int x = 0; x < mw; ++x) {
-          const float v = lg[std::size_t(y) * mw + x];
+          const float v = lg.data[(std::size_t(y) * mw + x) * 16];  // channel 0 of block 0 of frame 0
           const bool tr = truth[std::size_t(y * d + d / 2) * W + x * d + d / 2] != 0;
           for (std::size_t k = 0; k < cuts.size(); ++k) {
             const bool pr = v > logit_cuts[k];

@@ -85,7 +85,6 @@ struct PosePipeline::Impl {
   std::vector<bool> slot_mask_ran;
   std::vector<float> slot_share;
   std::vector<float> shares;  // each stored mask's share of the frame
-  std::vector<float> logits0;  // stage 1's latest current-frame mask before the cut
   double beta = 0.99;
   Pose last;
   bool have_last = false;
@@ -235,8 +234,6 @@ struct PosePipeline::Impl {
       const layers::Act& m = nets.mask.masks();
       masks.resize(std::size_t(cfg.n_masks));
       for (int c = 0; c < cfg.n_masks; ++c) input::mask_cut(m, 0, c, masks[std::size_t(c)], float(cfg.mask_cut));
-      logits0.resize(m.pixels());
-      for (std::size_t i = 0; i < logits0.size(); ++i) logits0[i] = m.data[i * 16];  // channel 0 of block 0
       scores = nets.mask.scores();
       boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
       shares.assign(std::size_t(cfg.n_masks), 0.0f);
@@ -360,7 +357,7 @@ const std::vector<float>& PosePipeline::last_mask() const {
 const layers::Act& PosePipeline::last_input() const { return impl_->last_in; }
 const std::vector<std::vector<float>>& PosePipeline::stored_masks() const { return impl_->masks; }
 const std::vector<float>& PosePipeline::stored_scores() const { return impl_->scores; }
-const std::vector<float>& PosePipeline::stage1_logits() const { return impl_->logits0; }
+const layers::Act& PosePipeline::stage1_logits() const { return impl_->nets.mask.masks(); }
 int PosePipeline::mask_downscale() const { return impl_->nets.cfg.downscale; }
 double PosePipeline::focal_px() const { return kFocalPx; }
 bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }

@@ -96,9 +96,10 @@ class PosePipeline {
   // binarised, the model's input size) and their scores.
   const std::vector<std::vector<float>>& stored_masks() const;
   const std::vector<float>& stored_scores() const;
-  // Stage 1's latest run, its current-frame mask before the cut: logits at the model's input
-  // size (empty before the first run). Lets one pass score every cut (weights calibrate).
-  const std::vector<float>& stage1_logits() const;
+  // Stage 1's latest run before the cut: its masks' logits at the model's input size (channel
+  // 0 the current frame; the net's own buffer, nothing copied on the hot path). Lets one pass
+  // score every cut (weights calibrate).
+  const layers::Act& stage1_logits() const;
   // Stage 2's input of the latest tick: the masked, downscaled TORE (one frame, blocked).
   const layers::Act& last_input() const;
   int mask_downscale() const;
