@@ -95,6 +95,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       const json& pr = section(r, "presence", where + ".run");
       c.presence_a = get_num(pr, where + ".run.presence", "a");
       c.presence_b = get_num(pr, where + ".run.presence", "b");
+      if (pr.contains("tau_s")) c.presence_tau_s = get_num(pr, where + ".run.presence", "tau_s");
       c.presence_calibrated = true;
     }
   }
@@ -103,6 +104,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.downscale >= 1, "input.downscale must be >= 1"},
       {c.window >= 1, "input.window must be >= 1"},
       {c.crop_margin >= 0, "pose.crop_margin must be >= 0"},
+      {c.presence_tau_s >= 0 && c.presence_tau_s <= 60, "run.presence.tau_s must lie in 0..60 (seconds)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",
        "mask.role must be mask, presence or none"},
       {(c.mask_role == "mask") == c.masked_input,

@@ -38,7 +38,9 @@ struct ModelConfig {
   //   run.beta: the early-exit threshold it ships with (above 1: stage 1 on every tick).
   //   run.presence {a, b}: P(person) = sigmoid(a * ln(s + 0.001) + b), s the share of the
   //   frame the mask in use covers (fitted by `yelan calibrate`); absent, a fixed guess that
-  //   puts P = 0.5 near s = 1% (presence_calibrated false says so).
+  //   puts P = 0.5 near s = 1% (presence_calibrated false says so). run.presence.tau_s
+  //   (optional, default 0): ln(s + 0.001) is first averaged over the ticks, exponentially
+  //   with this time constant in seconds (run::PresenceSmoother).
   //   run.depth_scale: the body-height prior's head depth is multiplied by it (fitted by
   //   `yelan calibrate`: a net's skeletons are shorter than the bodies it saw, soft-argmax
   //   pulls joints toward the middle, so the prior alone puts the dancer too far away).
@@ -49,6 +51,7 @@ struct ModelConfig {
   double mask_cut = 0.1;
   double depth_scale = 1;
   double presence_a = 3.0, presence_b = 13.8;
+  double presence_tau_s = 0;
   bool presence_calibrated = false;
   std::string json;  // the source text
 

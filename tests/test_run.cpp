@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -154,6 +155,34 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
     const auto bad_cut = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
     CHECK(bad_cut.code == 2);
     CHECK(contains(bad_cut.err, "run.mask_cut must be in (0, 1)"));
+  }
+  for (const char* tau : {"-0.1", "61"}) {
+    std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"presence\": {\"a\": 1, \"b\": 4, \"tau_s\": " << tau
+                                  << "}}}\n";
+    const auto bad_tau = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
+    CHECK(bad_tau.code == 2);
+    CHECK(contains(bad_tau.err, "run.presence.tau_s must lie in 0..60"));
+  }
+  // run.presence.tau_s smooths ln(share + 0.001) over the ticks before the calibration:
+  // each pose's confidence is the logistic of the smoothed feature of the shares so far
+  // (the shipped model, whose masks change from tick to tick; the override is the config's).
+  for (const double tau : {0.0, 0.1}) {
+    yelan::run::RunOptions o;
+    o.presence_ab = std::array<double, 2>{1, 4};
+    o.presence_tau_s = tau;
+    o.beta = 2;
+    yelan::run::PosePipeline pipe(std::string(YELAN_SOURCE_DIR) + "/models/default.h5", 346, 260, o);
+    std::vector<yelan::run::Pose> poses;
+    yelan::run::run_file(pipe, d / "r.yelan.h5", 200000, [&](const yelan::run::Pose& p) { poses.push_back(p); });
+    REQUIRE(poses.size() >= 5);
+    yelan::run::PresenceSmoother by_hand(tau);
+    bool differs = false;
+    for (const auto& p : poses) {
+      const double x = by_hand.update(p.mask_share, p.t_us);
+      CHECK(p.confidence == Approx(yelan::run::presence_probability_of_feature(x, 1, 4)).margin(1e-6));
+      differs = differs || std::abs(p.confidence - yelan::run::presence_probability(p.mask_share, 1, 4)) > 1e-3;
+    }
+    CHECK(differs == (tau > 0));
   }
   // run.mask_cut is where stage 1's masks are cut: a higher cut never covers more of the
   // frame (the same net: same seed; stage 1 on every tick).
@@ -514,6 +543,69 @@ TEST_CASE("run: presence calibration recovers a known logistic law and reports i
   CHECK(contains(text.str(), "    dynamic   dancer 100.0% of 1; empty 100.0% of 1\n"));
 }
 
+TEST_CASE("run: presence smoothed over time ignores blobs of a few ticks, at a latency it predicts", "[run]") {
+  using namespace yelan::run;
+  // tau 0: the tick's own feature; tau > 0: after tau seconds of a step the smoothed feature
+  // has covered 1 - 1/e of it, whatever the tick rate; time going back starts afresh.
+  PresenceSmoother raw(0);
+  CHECK(raw.update(0.05, 0) == presence_feature(0.05));
+  CHECK(raw.update(0.0, 20000) == presence_feature(0.0));
+  for (const std::int64_t dt : {20000, 5000}) {
+    PresenceSmoother s(0.2);
+    CHECK(s.update(0.0, 0) == presence_feature(0.0));
+    double x = 0;
+    for (std::int64_t t = dt; t <= 200000; t += dt) x = s.update(0.05, t);
+    const double x0 = presence_feature(0.0), x1 = presence_feature(0.05);
+    CHECK(x == Approx(x0 + (1 - std::exp(-1.0)) * (x1 - x0)).epsilon(1e-9));
+    CHECK(s.update(0.2, 100) == presence_feature(0.2));  // a new recording
+    s.reset();
+    CHECK(s.update(0.0, 300000) == presence_feature(0.0));
+  }
+  // The latency: the step's crossing of P = 0.5, simulated at 1 ms ticks.
+  const double a = 1, b = 4;  // P = 0.5 at ln(s + 0.001) = -4
+  for (const auto& [from, to] : std::vector<std::pair<double, double>>{{0.0, 0.05}, {0.05, 0.0}}) {
+    PresenceSmoother s(0.2);
+    s.update(from, 0);
+    double crossed = -1;
+    for (std::int64_t t = 1000; t <= 2000000 && crossed < 0; t += 1000)
+      if ((presence_probability_of_feature(s.update(to, t), a, b) >= 0.5) != (presence_probability(from, a, b) >= 0.5))
+        crossed = double(t) * 1e-6;
+    CHECK(presence_latency_s(a, b, 0.2, from, to) == Approx(crossed).margin(0.0011));
+    CHECK(presence_latency_s(a, b, 0, from, to) == 0);
+  }
+  CHECK(std::isinf(presence_latency_s(a, b, 0.2, 0.0, 0.01)));  // ln(0.011) < -4: never called person
+  // Ticks of 20 recordings a side: empty scenes with a one-tick blob every 10th tick, dancers
+  // hidden on every 10th tick. The tick's own share cannot do better than 10% wrong on one
+  // side; smoothed over 0.1 s, a blob or a gap of one tick no longer flips the verdict.
+  std::vector<PresenceSample> ticks;
+  for (int r = 0; r < 40; ++r)
+    for (int k = 0; k < 100; ++k) {
+      const bool dancer = r % 2, odd = k % 10 == 5;
+      ticks.push_back({dancer != odd ? 0.05 : 0.0, dancer, "rec" + std::to_string(r), std::int64_t(k) * 20000});
+    }
+  const PresenceFit f0 = fit_presence(ticks, 0);
+  const PresenceReport r0 = presence_report(ticks, f0.a, f0.b, 0.5, 0);
+  CHECK(r0.false_alarm_rate + (1 - r0.hit_rate) >= 0.099);
+  const PresenceFit f1 = fit_presence(ticks, 0.1);
+  const PresenceReport r1 = presence_report(ticks, f1.a, f1.b, 0.5, 0.1);
+  CHECK(r1.false_alarm_rate < 0.01);
+  CHECK(r1.hit_rate > 0.99);
+  CHECK(presence_log_loss(ticks, f1.a, f1.b, 0.1) < presence_log_loss(ticks, f0.a, f0.b, 0));
+  // Each recording's smoothing starts afresh: the first tick of a dancer after an empty
+  // recording is its own share.
+  const std::vector<double> xs = presence_features(ticks, 0.1);
+  CHECK(xs[100] == presence_feature(0.05));
+  CHECK(xs[99] < presence_feature(0.0) + 0.5);
+  // The largest blob's share of a mask: 8-connected (a diagonal joins), 0 when empty.
+  const std::vector<float> mask = {1, 1, 0, 0, 0,  //
+                                   0, 0, 1, 0, 1,  //
+                                   0, 0, 0, 0, 1};
+  CHECK(largest_blob_share(mask, 5, 3) == Approx(3.0 / 5));
+  CHECK(largest_blob_share(std::vector<float>(15, 0.f), 5, 3) == 0);
+  CHECK(largest_blob_share(std::vector<float>(15, 1.f), 5, 3) == 1);
+  CHECK_THROWS_AS(largest_blob_share(mask, 4, 3), std::invalid_argument);
+}
+
 TEST_CASE("run: the presence calibration settles where a refit flips between two fits", "[run]") {
   using namespace yelan::run;
   // A refit that mirrors its calibration about m: run under A, the ticks fit B, and under B
@@ -551,9 +643,23 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
                    "0", "--val-empty", "1", "--duration", "0.5s", "--threads", "1"})
               .code == 0);
   const auto c = run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "c.h5", "--seconds",
-                          "0.3", "--skip", "0.1"});
+                          "0.3", "--skip", "0.1", "--presence-tau", "0.1", "--ticks", d / "ticks.csv"});
   INFO(c.err);
   REQUIRE(c.code == 0);
+  // The smoothing is stored and its sweep shown; the ticks of the fit are written, both kinds.
+  CHECK(contains(c.out, "presence smoothing (tau_s"));
+  CHECK(contains(c.out, "  0.10: "));
+  CHECK(contains(c.out, "(in use)"));
+  CHECK(contains(c.out, ", tau_s 0.1 (balanced log-loss"));
+  const auto ticks = csv_rows(slurp(d / "ticks.csv"));
+  REQUIRE(ticks.size() > 10);
+  CHECK(ticks[0].size() == 9);
+  CHECK(ticks[0][2] == "person");
+  std::set<std::string> truths;
+  for (std::size_t i = 1; i < ticks.size(); ++i) truths.insert(ticks[i][2]);
+  CHECK(truths == std::set<std::string>{"0", "1"});
+  CHECK(contains(c.out, "wrote " + (d / "ticks.csv") + " (" + std::to_string(ticks.size() - 1) + " ticks"));
+  CHECK(run_cli({"weights", "calibrate", "--weights", d / "w.h5", "--data", d / "ds", "-o", d / "x.h5", "--presence-tau", "-1"}).code == 2);
   CHECK(contains(c.out, "before (the uncalibrated default"));
   CHECK(contains(c.out, "fitted: a "));
   CHECK(contains(c.out, "refitting on its own ticks would move P(person) by "));
@@ -567,6 +673,7 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(err_after <= err_before);
   const auto info = run_cli({"weights", "inspect", d / "c.h5"});
   CHECK(contains(info.out, "\"presence\""));
+  CHECK(contains(info.out, "\"tau_s\":0.1"));
   CHECK(contains(info.out, "\"depth_scale\""));
   // The deployed path scored on the same recordings: the dancer's poses against its labels,
   // the empty scene's counted; the fitted scale makes the median depth ratio 1 there.

@@ -238,6 +238,26 @@ int combine(const Args& a, std::ostream& out) {
   return kOk;
 }
 
+// What smoothing the presence feature over time would buy on the same ticks: each time
+// constant refitted, its hit and false-alarm rates, and how long the verdict takes to flip
+// when a dancer of the median dancer tick's share appears in an empty picture or leaves it.
+void print_smoothing_sweep(const std::vector<run::PresenceSample>& samples, double chosen, std::ostream& out) {
+  std::vector<double> dancer_shares;
+  for (const auto& s : samples)
+    if (s.person) dancer_shares.push_back(s.share);
+  const double typical = run::percentile(dancer_shares, 0.5);
+  out << std::fixed << std::setprecision(1) << "presence smoothing (tau_s, refitted on these ticks: dancer ticks called person, "
+      << "empty ticks called person, seconds to call a dancer of share " << std::setprecision(3) << typical
+      << " who appears, and one who leaves):\n";
+  for (double tau : {0.0, 0.05, 0.1, 0.2, 0.3, 0.5}) {
+    const run::PresenceFit f = run::fit_presence(samples, tau);
+    const run::PresenceReport r = run::presence_report(samples, f.a, f.b, 0.5, tau);
+    out << std::setprecision(2) << "  " << tau << ": " << std::setprecision(1) << 100 * r.hit_rate << "%, "
+        << 100 * r.false_alarm_rate << "%, " << std::setprecision(2) << run::presence_latency_s(f.a, f.b, tau, 0, typical)
+        << " s, " << run::presence_latency_s(f.a, f.b, tau, typical, 0) << " s" << (tau == chosen ? "  (in use)" : "") << "\n";
+  }
+}
+
 // Fits the presence calibration (and stores a beta) for `yelan run`, on the validation
 // recordings of a dataset: every tick through the deployed pipeline.
 int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
@@ -250,6 +270,10 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   const std::optional<std::string> beta = a.value("--beta");
   const double beta_v = a.number_or("--beta", 0.99, 0, 1);
   check_output("-o", *o, {*w});
+  const auto ticks = a.value("--ticks");
+  const std::optional<std::string> tau_given = a.value("--presence-tau");
+  const double tau_v = a.number_or("--presence-tau", 0, 0, 60);
+  if (ticks) check_output("--ticks", *ticks, {*w, *o});
   const std::filesystem::path val = std::filesystem::path(*data) / "val";
   const std::string dir = std::filesystem::is_directory(val) ? val.string() : *data;
   const std::vector<std::string> recs = camera::sim::list_recordings(dir);
@@ -260,6 +284,8 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   run::RunOptions opt;
   opt.rate_hz = rate;
   if (beta) opt.beta = beta_v;
+  const double tau = tau_given ? tau_v : before.presence_tau_s;
+  opt.presence_tau_s = tau;
   // Stage 1's cut first: presence is fitted on the share of the frame the cut mask covers.
   std::optional<double> cut;
   if (a.flag("--choose-mask-cut")) {
@@ -281,30 +307,35 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   std::vector<std::pair<double, double>> depths;
   auto samples = run::presence_samples(*w, recs, opt, seconds + skip, skip, err, &depths);
   out << "before (" << (before.presence_calibrated ? "its calibration" : "the uncalibrated default") << ", a "
-      << before.presence_a << ", b " << before.presence_b << "):\n";
-  run::print_presence_report(run::presence_report(samples, before.presence_a, before.presence_b, 0.5), out);
+      << before.presence_a << ", b " << before.presence_b << ", tau_s " << before.presence_tau_s << "):\n";
+  run::print_presence_report(run::presence_report(samples, before.presence_a, before.presence_b, 0.5, before.presence_tau_s), out);
   // The look-again rule reads the calibration (a stored mask that says nobody is not reused),
   // so the ticks run under a fit differ from those it was fitted on: run again under the fit
   // until a refit would move P(person) by less than 0.02 (at most 4 more runs, halfway steps
   // after the first). What is stored is the calibration the last run ran under, and its
   // report is that run's.
   const auto settled = run::settle_presence(
-      {before.presence_a, before.presence_b}, run::fit_presence(samples),
+      {before.presence_a, before.presence_b}, run::fit_presence(samples, tau),
       [&](const std::array<double, 2>& ab) {
         opt.presence_ab = ab;
         err << std::defaultfloat << std::setprecision(6) << "running again under a " << ab[0] << ", b " << ab[1] << "\n";
         depths.clear();
         samples = run::presence_samples(*w, recs, opt, seconds + skip, skip, err, &depths);
-        return run::fit_presence(samples);
+        return run::fit_presence(samples, tau);
       },
       0.02, 4);
   const std::array<double, 2> used = settled.used;
-  out << std::defaultfloat << std::setprecision(6) << "fitted: a " << used[0] << ", b " << used[1] << " (balanced log-loss "
-      << run::presence_log_loss(samples, used[0], used[1]) << "; refitting on its own ticks would move P(person) by "
-      << std::setprecision(2) << settled.moved << " at most):\n";
-  run::print_presence_report(run::presence_report(samples, used[0], used[1], 0.5), out);
+  out << std::defaultfloat << std::setprecision(6) << "fitted: a " << used[0] << ", b " << used[1] << ", tau_s " << tau
+      << " (balanced log-loss " << run::presence_log_loss(samples, used[0], used[1], tau)
+      << "; refitting on its own ticks would move P(person) by " << std::setprecision(2) << settled.moved << " at most):\n";
+  run::print_presence_report(run::presence_report(samples, used[0], used[1], 0.5, tau), out);
+  print_smoothing_sweep(samples, tau, out);
+  if (ticks) {
+    run::write_presence_ticks(*ticks, samples);
+    out << "wrote " << *ticks << " (" << samples.size() << " ticks of that run)\n";
+  }
   std::ostringstream pj;
-  pj << std::setprecision(9) << "{\"a\": " << used[0] << ", \"b\": " << used[1] << "}";
+  pj << std::setprecision(9) << "{\"a\": " << used[0] << ", \"b\": " << used[1] << ", \"tau_s\": " << tau << "}";
   wt.config_json = with_run_setting(wt.config_json, "presence", pj.str());
   // The deployed depth: the body-height prior times a scale, fitted on the same poses.
   if (!depths.empty()) {
@@ -366,7 +397,8 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "verify") return verify(Args("weights verify", rest, {"--config"}, {}), out, err);
     if (sub == "init") return weights_init(rest, out);
     if (sub == "calibrate")
-      return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta", "--beta-tolerance"},
+      return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta", "--beta-tolerance", "--ticks",
+                                                          "--presence-tau"},
                             {"--choose-beta", "--choose-mask-cut"}),
                        out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);

@@ -41,7 +41,48 @@ PoseNet::CropBox bounding_box(const std::vector<float>& mask, int w, int h) {
   return b.empty() ? PoseNet::CropBox{} : b;
 }
 
+// Mean sigmoid of channel c's logits over the pixels the cut kept (0 where none).
+float mean_probability_inside(const layers::Act& logits, int c, const std::vector<float>& keep) {
+  const float* p = logits.data + std::size_t(c / 16) * logits.pixels() * 16 + c % 16;
+  double sum = 0;
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < keep.size(); ++i)
+    if (keep[i] != 0) sum += 1 / (1 + std::exp(-double(p[i * 16]))), ++n;
+  return n ? float(sum / double(n)) : 0.f;
+}
+
 }  // namespace
+
+float largest_blob_share(const std::vector<float>& mask, int w, int h) {
+  if (w <= 0 || h <= 0 || mask.size() != std::size_t(w) * std::size_t(h))
+    throw std::invalid_argument("largest_blob_share: a " + std::to_string(w) + "x" + std::to_string(h) + " mask of " +
+                                std::to_string(mask.size()) + " pixels");
+  std::vector<std::uint8_t> seen(mask.size(), 0);
+  std::vector<std::size_t> stack;
+  std::size_t total = 0, best = 0;
+  for (std::size_t s = 0; s < mask.size(); ++s) {
+    if (mask[s] == 0 || seen[s]) continue;
+    std::size_t n = 0;
+    stack.assign(1, s);
+    seen[s] = 1;
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      ++n;
+      const int x = int(i % std::size_t(w)), y = int(i / std::size_t(w));
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= w || ny >= h) continue;
+          const std::size_t j = std::size_t(ny) * std::size_t(w) + std::size_t(nx);
+          if (mask[j] != 0 && !seen[j]) seen[j] = 1, stack.push_back(j);
+        }
+    }
+    total += n;
+    best = std::max(best, n);
+  }
+  return total ? float(best) / float(total) : 0.f;
+}
 
 double head_depth_from_height(const std::array<std::array<double, 3>, 13>& unit, double height_mm) {
   // The limbs' lengths for this height, as the simulator's bodies have them (Drillis-Contini).
@@ -83,8 +124,13 @@ struct PosePipeline::Impl {
   int slot = 0;
   std::vector<std::int64_t> slot_t;
   std::vector<bool> slot_mask_ran;
-  std::vector<float> slot_share;
-  std::vector<float> shares;  // each stored mask's share of the frame
+  // What each stored mask says of presence, and what each window slot's mask said.
+  struct Cues {
+    float share = 0, mean_p = 0, blob = 0, score = 0;
+  };
+  std::vector<Cues> slot_cues;
+  std::vector<Cues> cues;
+  PresenceSmoother smoother;
   double beta = 0.99;
   Pose last;
   bool have_last = false;
@@ -110,10 +156,12 @@ struct PosePipeline::Impl {
     else nets.pose.set_streaming(true);
     slot_t.resize(std::size_t(cfg.window));
     slot_mask_ran.resize(std::size_t(cfg.window));
-    slot_share.resize(std::size_t(cfg.window));
+    slot_cues.resize(std::size_t(cfg.window));
     beta = o.beta >= 0 ? o.beta : cfg.run_beta;
     if (o.presence_ab) nets.cfg.presence_a = (*o.presence_ab)[0], nets.cfg.presence_b = (*o.presence_ab)[1];
     if (o.mask_cut) nets.cfg.mask_cut = *o.mask_cut;
+    if (o.presence_tau_s) nets.cfg.presence_tau_s = *o.presence_tau_s;
+    smoother = PresenceSmoother(nets.cfg.presence_tau_s);
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
   }
@@ -148,7 +196,7 @@ struct PosePipeline::Impl {
       p.t_us = slot_t[std::size_t(f)];
       p.mask_ran = slot_mask_ran[std::size_t(f)];
       p.head_depth_mm = z;
-      set_presence(p, slot_share[std::size_t(f)]);
+      set_presence(p, slot_cues[std::size_t(f)]);
       double conf = 0;
       for (int j = 0; j < 13; ++j) {
         for (int c = 0; c < 3; ++c) p.joints_mm[std::size_t(j)][std::size_t(c)] = float(unit[std::size_t(j)][std::size_t(c)] * z);
@@ -168,10 +216,15 @@ struct PosePipeline::Impl {
     }
   }
 
-  void set_presence(Pose& p, float share) const {
+  void set_presence(Pose& p, const Cues& c) {
     const ModelConfig& cfg = nets.cfg;
-    p.mask_share = share;
-    p.confidence = cfg.runs_stage1() ? presence_of(share) : 1.0f;
+    p.mask_share = c.share;
+    p.mask_mean_p = c.mean_p;
+    p.mask_blob = c.blob;
+    p.mask_score = c.score;
+    p.confidence = cfg.runs_stage1() ? float(presence_probability_of_feature(smoother.update(c.share, p.t_us), cfg.presence_a,
+                                                                            cfg.presence_b))
+                                     : 1.0f;
     p.person = p.confidence >= opt.presence_threshold;
   }
   float presence_of(float share) const {
@@ -227,7 +280,7 @@ struct PosePipeline::Impl {
     // that saw an empty room is confidently wrong about the next 300 ms once someone walks in
     // (a dancer was missed on the first 16 ticks of the demo).
     const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta ||
-                                                presence_of(shares[std::size_t(idx)]) < opt.presence_threshold);
+                                                presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold);
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);
@@ -236,11 +289,15 @@ struct PosePipeline::Impl {
       for (int c = 0; c < cfg.n_masks; ++c) input::mask_cut(m, 0, c, masks[std::size_t(c)], float(cfg.mask_cut));
       scores = nets.mask.scores();
       boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
-      shares.assign(std::size_t(cfg.n_masks), 0.0f);
+      cues.assign(std::size_t(cfg.n_masks), Cues{});
       for (int c = 0; c < cfg.n_masks; ++c) {
         const auto& mc = masks[std::size_t(c)];
         boxes[std::size_t(c)] = bounding_box(mc, m.w, m.h);
-        shares[std::size_t(c)] = float(std::count_if(mc.begin(), mc.end(), [](float v) { return v != 0; })) / float(mc.size());
+        Cues& q = cues[std::size_t(c)];
+        q.share = float(std::count_if(mc.begin(), mc.end(), [](float v) { return v != 0; })) / float(mc.size());
+        q.mean_p = mean_probability_inside(m, c, mc);
+        q.blob = largest_blob_share(mc, m.w, m.h);
+        q.score = scores[std::size_t(c)];
       }
       mask_t = T;
       have_masks = true;
@@ -260,7 +317,7 @@ struct PosePipeline::Impl {
     last_in = {dst.data + std::size_t(n) * per_frame, 1, dst.c, dst.h, dst.w};
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;
-    slot_share[std::size_t(slot)] = cfg.runs_stage1() ? shares[std::size_t(use)] : 1.0f;
+    slot_cues[std::size_t(slot)] = cfg.runs_stage1() ? cues[std::size_t(use)] : Cues{1, 1, 1, 1};
     const PoseNet::CropBox box = cfg.masked_input ? grown(boxes[std::size_t(use)]) : PoseNet::CropBox{};
     int ready = 0;
     if (!cfg.bidirectional) {
@@ -268,7 +325,7 @@ struct PosePipeline::Impl {
       run_stage2(frame.act, 1, box);
       slot_t[0] = T;
       slot_mask_ran[0] = run_mask;
-      slot_share[0] = slot_share[std::size_t(slot)];
+      slot_cues[0] = slot_cues[std::size_t(slot)];
       slot = (slot + 1) % cfg.window;
       ready = 1;
     } else {
@@ -312,6 +369,7 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
       m.stats.gap_ticks += std::uint64_t(skip);
       m.slot = 0;
       m.have_masks = false;
+      m.smoother.reset();
     }
     while (e.t > m.next_tick) {
       m.tick(m.next_tick, out);
@@ -345,9 +403,20 @@ const RunStats& PosePipeline::stats() const { return impl_->stats; }
 std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
 double PosePipeline::beta() const { return impl_->beta; }
 
+double presence_feature(double share) { return std::log(std::max(0.0, share) + 0.001); }
+double presence_probability_of_feature(double x, double a, double b) { return 1 / (1 + std::exp(-(a * x + b))); }
 double presence_probability(double share, double a, double b) {
-  const double z = a * std::log(std::max(0.0, share) + 0.001) + b;
-  return 1 / (1 + std::exp(-z));
+  return presence_probability_of_feature(presence_feature(share), a, b);
+}
+
+double PresenceSmoother::update(double share, std::int64_t t_us) {
+  const double x = presence_feature(share);
+  // The first tick, no smoothing, or time going backwards (a new recording): start afresh.
+  if (!have_ || tau_us_ <= 0 || t_us < t_) x_ = x;
+  else x_ += (1 - std::exp(-double(t_us - t_) / tau_us_)) * (x - x_);
+  have_ = true;
+  t_ = t_us;
+  return x_;
 }
 const std::vector<float>& PosePipeline::last_tore() const { return impl_->vol; }
 const std::vector<float>& PosePipeline::last_mask() const {

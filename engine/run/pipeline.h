@@ -39,10 +39,13 @@ struct RunOptions {
   std::optional<std::array<double, 2>> presence_ab;
   // Stage 1's sigmoid cut instead of the model's run.mask_cut (calibrate's sweep of cuts).
   std::optional<double> mask_cut;
+  // P(person)'s smoothing time constant (s) instead of the model's run.presence.tau_s.
+  std::optional<double> presence_tau_s;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
-// through the model's calibration (ModelConfig run.presence) to a probability. A model
+// its logarithm smoothed over the last ticks (PresenceSmoother), through the model's
+// calibration (ModelConfig run.presence) to a probability. A model
 // without stage 1 (mask.role none) has no opinion: presence 1 on every tick.
 struct Pose {
   std::int64_t t_us = 0;
@@ -50,6 +53,10 @@ struct Pose {
   float confidence = 1;       // P(a person is there), calibrated
   bool person = true;         // confidence >= RunOptions::presence_threshold
   float mask_share = 0;       // the mask's share of the frame (what confidence is computed from)
+  // More of what stage 1 says (recorded for calibration studies; P(person) reads the share):
+  float mask_mean_p = 0;      // its mean probability over the mask's pixels (0 for an empty mask)
+  float mask_blob = 0;        // the largest 8-connected blob's share of the mask (0 for an empty mask)
+  float mask_score = 0;       // its score for the mask in use (predicted 1 - mean |mask error|)
   float pose_confidence = 0;  // mean over joints of the last stage's xy peak probability
   bool mask_ran = false, stale = false;
   double head_depth_mm = 0;
@@ -121,8 +128,33 @@ double head_depth_from_height(const std::array<std::array<double, 3>, 13>& joint
 // The q-quantile (0..1) of per-tick times, nearest rank; 0 for none.
 double percentile(std::vector<double> v, double q);
 
+// The largest 8-connected blob of nonzero pixels of a w x h mask, as a share of all of them
+// (0 for an empty mask): a dancer is one blob, furniture lit by a sweeping lamp several.
+float largest_blob_share(const std::vector<float>& mask, int w, int h);
+
 // P(person) for a mask covering `share` of the frame, by the model's calibration.
 double presence_probability(double share, double a, double b);
+// What P(person) reads: ln(share + 0.001).
+double presence_feature(double share);
+// P(person) from the (smoothed) feature.
+double presence_probability_of_feature(double x, double a, double b);
+
+// The presence feature averaged over time, exponentially with time constant tau_s (0: the
+// tick's own): a furniture blob that a sweeping lamp lights for a few ticks, or a dancer
+// half hidden for a few, does not flip the verdict; the price is latency (a dancer who
+// walks in is called after about tau_s). One tick to the next: x += (1 - exp(-dt / tau)) (x_t - x).
+class PresenceSmoother {
+ public:
+  explicit PresenceSmoother(double tau_s = 0) : tau_us_(tau_s * 1e6) {}
+  double update(double share, std::int64_t t_us);  // the smoothed feature at t_us
+  void reset() { have_ = false; }
+
+ private:
+  double tau_us_;
+  bool have_ = false;
+  double x_ = 0;
+  std::int64_t t_ = 0;
+};
 
 // CSV: t_us, then x,y,z (mm) of the 13 joints in SPEC order (empty when no person),
 // confidence (P(person)), mask_ran, person (0/1), pose_confidence, mask_share.

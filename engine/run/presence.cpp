@@ -4,8 +4,11 @@
 #include <array>
 #include <cmath>
 #include <iomanip>
+#include <limits>
+#include <sstream>
 #include <stdexcept>
 
+#include "camera/io/temp_file.h"
 #include "camera/sim/recording_windows.h"
 #include "engine/run/pipeline.h"
 
@@ -13,7 +16,6 @@ namespace yelan::run {
 
 namespace {
 
-double feature(double share) { return std::log(std::max(0.0, share) + 0.001); }
 double sigmoid(double z) { return 1 / (1 + std::exp(-z)); }
 
 // Both classes' weights (each half), refusing samples of one class alone.
@@ -27,16 +29,37 @@ std::array<double, 2> class_weights(const std::vector<PresenceSample>& samples) 
 }
 
 // The weighted log-loss, computed stably (log1p of exp of the margin).
-double balanced_log_loss(const std::vector<PresenceSample>& samples, double a, double b, double w_pos, double w_neg) {
+double balanced_log_loss(const std::vector<PresenceSample>& samples, const std::vector<double>& x, double a, double b,
+                         double w_pos, double w_neg) {
   double l = 0;
-  for (const auto& s : samples) {
-    const double z = a * feature(s.share) + b, m = s.person ? z : -z;  // -log sigmoid(m)
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const auto& s = samples[i];
+    const double z = a * x[i] + b, m = s.person ? z : -z;  // -log sigmoid(m)
     l += (s.person ? w_pos : w_neg) * (m > 0 ? std::log1p(std::exp(-m)) : -m + std::log1p(std::exp(m)));
   }
   return l;
 }
 
 }  // namespace
+
+std::vector<double> presence_features(const std::vector<PresenceSample>& samples, double tau_s) {
+  std::vector<double> x(samples.size());
+  PresenceSmoother smooth(tau_s);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (i > 0 && samples[i].recording != samples[i - 1].recording) smooth.reset();
+    x[i] = smooth.update(samples[i].share, samples[i].t_us);
+  }
+  return x;
+}
+
+double presence_latency_s(double a, double b, double tau_s, double from, double to) {
+  const double x0 = presence_feature(from), x1 = presence_feature(to);
+  if (a <= 0 || x0 == x1) return std::numeric_limits<double>::infinity();
+  const double f = (-b / a - x0) / (x1 - x0);  // the part of the step the smoothed x must cover
+  if (f <= 0) return 0;
+  if (f >= 1) return std::numeric_limits<double>::infinity();
+  return tau_s > 0 ? -tau_s * std::log(1 - f) : 0;
+}
 
 double presence_distance(const std::array<double, 2>& x, const std::array<double, 2>& y) {
   double most = 0;
@@ -60,20 +83,22 @@ PresenceSettle settle_presence(const std::array<double, 2>& start, const Presenc
   return r;
 }
 
-double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b) {
+double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b, double tau_s) {
   const auto w = class_weights(samples);
-  return balanced_log_loss(samples, a, b, w[0], w[1]);
+  return balanced_log_loss(samples, presence_features(samples, tau_s), a, b, w[0], w[1]);
 }
 
-PresenceFit fit_presence(const std::vector<PresenceSample>& samples) {
+PresenceFit fit_presence(const std::vector<PresenceSample>& samples, double tau_s) {
   const auto [w_pos, w_neg] = class_weights(samples);
+  const std::vector<double> xs = presence_features(samples, tau_s);
   const double ridge = 1e-4;
-  const auto loss = [&](double a, double b) { return 0.5 * ridge * a * a + balanced_log_loss(samples, a, b, w_pos, w_neg); };
+  const auto loss = [&](double a, double b) { return 0.5 * ridge * a * a + balanced_log_loss(samples, xs, a, b, w_pos, w_neg); };
   double a = 1, b = 0, cur = loss(a, b);
   for (int it = 0; it < 200; ++it) {
     double ga = ridge * a, gb = 0, haa = ridge, hab = 0, hbb = 1e-9;
-    for (const auto& s : samples) {
-      const double x = feature(s.share), p = sigmoid(a * x + b), w = s.person ? w_pos : w_neg;
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const auto& s = samples[i];
+      const double x = xs[i], p = sigmoid(a * x + b), w = s.person ? w_pos : w_neg;
       const double r = w * (p - (s.person ? 1.0 : 0.0)), h = w * p * (1 - p);
       ga += r * x, gb += r;
       haa += h * x * x, hab += h * x, hbb += h;
@@ -121,7 +146,7 @@ void count_by_condition(std::map<std::string, PresenceReport::Condition>& by_con
   }
 }
 
-PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold) {
+PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold, double tau_s) {
   PresenceReport r;
   r.bins.resize(10);
   std::uint64_t hits = 0, alarms = 0;
@@ -130,8 +155,10 @@ PresenceReport presence_report(const std::vector<PresenceSample>& samples, doubl
   // a person is there half of the time, whatever the dataset's share of empty scenes.
   const double w_pos = r.person_ticks ? 0.5 / double(r.person_ticks) : 0, w_neg = r.empty_ticks ? 0.5 / double(r.empty_ticks) : 0;
   std::vector<double> weight(r.bins.size(), 0.0);
-  for (const auto& s : samples) {
-    const double p = presence_probability(s.share, a, b), w = s.person ? w_pos : w_neg;
+  const std::vector<double> xs = presence_features(samples, tau_s);
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const auto& s = samples[i];
+    const double p = presence_probability_of_feature(xs[i], a, b), w = s.person ? w_pos : w_neg;
     const bool called = p >= threshold;
     (s.person ? hits : alarms) += called;
     count_by_condition(r.by_condition, s.recording, s.person, called);
@@ -181,6 +208,16 @@ void print_presence_by_condition(const std::map<std::string, PresenceReport::Con
   }
 }
 
+void write_presence_ticks(const std::string& path, const std::vector<PresenceSample>& samples) {
+  std::ostringstream o;
+  o << "recording,t_us,person,share,mask_mean_p,mask_blob,mask_score,pose_confidence,mask_ran\n";
+  o.precision(6);
+  for (const auto& s : samples)
+    o << s.recording << "," << s.t_us << "," << (s.person ? 1 : 0) << "," << s.share << "," << s.mask_mean_p << ","
+      << s.mask_blob << "," << s.mask_score << "," << s.pose_confidence << "," << (s.mask_ran ? 1 : 0) << "\n";
+  camera::write_file_atomically(path, o.str());
+}
+
 double fit_depth_scale(const std::vector<std::pair<double, double>>& head_depths) {
   std::vector<double> r;
   for (const auto& [truth, est] : head_depths)
@@ -202,7 +239,8 @@ std::vector<PresenceSample> presence_samples(const std::string& weights, const s
     std::size_t before = out.size();
     const auto keep = [&](const Pose& p) {
       if (p.t_us < skip_us) return;
-      out.push_back({p.mask_share, info.dancer, info.name});
+      out.push_back({p.mask_share, info.dancer, info.name, p.t_us, p.mask_mean_p, p.mask_blob, p.mask_score,
+                     p.pose_confidence, p.mask_ran});
       if (head_depths && info.dancer && p.head_depth_mm > 0) {
         camera::sim::Joints13 joints;
         std::array<std::uint8_t, camera::sim::kJointCount> valid{};

@@ -20,20 +20,40 @@ struct PresenceSample {
   double share = 0;    // the mask's share of the frame on this tick
   bool person = false;  // the truth: the recording has a dancer
   std::string recording;  // its name, whose conditions (lighting, background, pan, ...) the report splits by
+  // The rest of what the tick's pose says (Pose's fields of the same names), for studies of
+  // what else could tell a dancer from an empty scene.
+  std::int64_t t_us = 0;
+  float mask_mean_p = 0, mask_blob = 0, mask_score = 0, pose_confidence = 0;
+  bool mask_ran = false;
 };
+
+// The samples as CSV, one tick a row (recording, t_us, person, share, the other cues),
+// written atomically.
+void write_presence_ticks(const std::string& path, const std::vector<PresenceSample>& samples);
 
 struct PresenceFit {
   double a = 0, b = 0;
   double log_loss = 0;  // class-balanced mean negative log-likelihood at the fit
 };
 
-// Logistic regression of person on ln(share + 0.001), both classes weighted equally (a
-// dataset's share of empty scenes says nothing of how often a stage is empty), Newton's
-// method with a little ridge so that separable data still gives finite numbers. a is kept
-// >= 0 (more mask never means less person). Throws std::invalid_argument without both classes.
-PresenceFit fit_presence(const std::vector<PresenceSample>& samples);
-// The class-balanced mean negative log-likelihood of P(person) = sigmoid(a ln(s + 0.001) + b).
-double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b);
+// Logistic regression of person on ln(share + 0.001), smoothed over each recording's ticks
+// with time constant tau_s as the pipeline smooths it (PresenceSmoother; the samples of a
+// recording in time order, the smoothing starting at its first sample), both classes
+// weighted equally (a dataset's share of empty scenes says nothing of how often a stage is
+// empty), Newton's method with a little ridge so that separable data still gives finite
+// numbers. a is kept >= 0 (more mask never means less person). Throws std::invalid_argument
+// without both classes.
+PresenceFit fit_presence(const std::vector<PresenceSample>& samples, double tau_s = 0);
+// The class-balanced mean negative log-likelihood of P(person) = sigmoid(a x + b), x the
+// smoothed ln(s + 0.001).
+double presence_log_loss(const std::vector<PresenceSample>& samples, double a, double b, double tau_s = 0);
+// Each sample's smoothed feature (a new recording wherever the name changes or time goes back).
+std::vector<double> presence_features(const std::vector<PresenceSample>& samples, double tau_s);
+
+// Seconds until the verdict flips (P crosses 0.5) after the share steps from `from` to `to`
+// and stays (smoothing alone, ticks taken as continuous): 0 where P at `to` is already on the
+// other side at once, infinity where it never gets there.
+double presence_latency_s(double a, double b, double tau_s, double from, double to);
 
 // The largest change in P(person) between calibrations x and y over the shares a mask can
 // cover (1e-4 .. 1).
@@ -74,7 +94,7 @@ struct PresenceReport {
   std::map<std::string, Condition> by_condition;
 };
 
-PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold);
+PresenceReport presence_report(const std::vector<PresenceSample>& samples, double a, double b, double threshold, double tau_s = 0);
 void print_presence_report(const PresenceReport& r, std::ostream& out);
 
 // The simulator's condition words in a recording's name (yelan sim --dataset names files
