@@ -275,5 +275,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|fit16|save|restore|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|fit16|save|restore|combine|all]" >&2; exit 2 ;;
 esac
