@@ -278,9 +278,13 @@ struct PosePipeline::Impl {
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
     // A stored mask that says nobody is there is not reused, however sure its score: a net
     // that saw an empty room is confidently wrong about the next 300 ms once someone walks in
-    // (a dancer was missed on the first 16 ticks of the demo).
+    // (a dancer was missed on the first 16 ticks of the demo). Nor is a future mask whose run
+    // saw nobody in the current frame: a prediction of someone who was not there (one mask
+    // net's future masks drew a person-sized blob in the real DAVIS346 room, where its
+    // current-frame masks drew none, and said "person" on 96% of the ticks at 200 per second).
     const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta ||
-                                                presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold);
+                                                presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold ||
+                                                presence_of(cues[0].share) < opt.presence_threshold);
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);
@@ -352,6 +356,7 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
   for (const camera::Event& e : events) {
     if (!m.started) {
       m.started = true;
+      m.smoother.start_empty(e.t);
       m.next_tick = e.t + m.dt_us;
       if (m.opt.tick_origin_us) {
         // The first tick at or after the event.
@@ -369,7 +374,7 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
       m.stats.gap_ticks += std::uint64_t(skip);
       m.slot = 0;
       m.have_masks = false;
-      m.smoother.reset();
+      m.smoother.start_empty(e.t);
     }
     while (e.t > m.next_tick) {
       m.tick(m.next_tick, out);
@@ -407,6 +412,12 @@ double presence_feature(double share) { return std::log(std::max(0.0, share) + 0
 double presence_probability_of_feature(double x, double a, double b) { return 1 / (1 + std::exp(-(a * x + b))); }
 double presence_probability(double share, double a, double b) {
   return presence_probability_of_feature(presence_feature(share), a, b);
+}
+
+void PresenceSmoother::start_empty(std::int64_t t_us) {
+  have_ = true;
+  x_ = presence_feature(0);
+  t_ = t_us;
 }
 
 double PresenceSmoother::update(double share, std::int64_t t_us) {

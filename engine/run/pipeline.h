@@ -147,7 +147,13 @@ class PresenceSmoother {
  public:
   explicit PresenceSmoother(double tau_s = 0) : tau_us_(tau_s * 1e6) {}
   double update(double share, std::int64_t t_us);  // the smoothed feature at t_us
+  // The next update starts afresh from its own share (the fit's recordings, whose first
+  // scored tick comes after the pipeline's smoothing has forgotten how it started).
   void reset() { have_ = false; }
+  // Starts afresh at t_us from nobody seen (the feature of an empty mask): after a stream
+  // starts or resumes, the first ticks (a TORE of a few milliseconds, the masks a net is
+  // least sure of) need about tau_s of evidence to say "person", as someone walking in does.
+  void start_empty(std::int64_t t_us);
 
  private:
   double tau_us_;
