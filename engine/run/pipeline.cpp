@@ -279,9 +279,7 @@ struct PosePipeline::Impl {
     // A stored mask that says nobody is there is not reused, however sure its score: a net
     // that saw an empty room is confidently wrong about the next 300 ms once someone walks in
     // (a dancer was missed on the first 16 ticks of the demo). Nor is a future mask whose run
-    // saw nobody in the current frame: a prediction of someone who was not there (one mask
-    // net's future masks drew a person-sized blob in the real DAVIS346 room, where its
-    // current-frame masks drew none, and said "person" on 96% of the ticks at 200 per second).
+    // saw nobody in the current frame: it predicts someone the net did not see.
     const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta ||
                                                 presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold ||
                                                 presence_of(cues[0].share) < opt.presence_threshold);
