@@ -2,6 +2,7 @@
 // a truncated file, bad arguments.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,6 +14,7 @@
 
 #include "cli_util.h"
 #include "camera/sim/presets.h"
+#include "camera/io/event_reader.h"
 #include "camera/sim/recording_reader.h"
 #include "engine/run/pipeline.h"
 #include "engine/run/stream_eval.h"
@@ -186,6 +188,36 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
       differs = differs || std::abs(p.confidence - yelan::run::presence_probability(p.mask_share, 1, 4)) > 1e-3;
     }
     CHECK(differs == (tau > 0));
+  }
+  // After a gap of more than 2 s the verdict starts from nobody again, one period before the
+  // first tick after the gap (the recording's events, then the same 3.007 s later; a time
+  // constant of 5 s, so a verdict carried over the gap would still show: 45% of it).
+  {
+    std::vector<yelan::camera::Event> ev;
+    auto reader = yelan::camera::open_event_file(d / "r.yelan.h5");
+    while (reader->read_until(ev, 200000, 1 << 20) > 0) {
+    }
+    REQUIRE(ev.size() > 1000);
+    const std::size_t n = ev.size();
+    for (std::size_t i = 0; i < n; ++i) ev.push_back({ev[i].t + 3007000, ev[i].x, ev[i].y, ev[i].p});
+    yelan::run::RunOptions o;
+    o.presence_ab = std::array<double, 2>{1, 4};
+    o.presence_tau_s = 5;
+    o.beta = 2;
+    yelan::run::PosePipeline pipe(std::string(YELAN_SOURCE_DIR) + "/models/default.h5", 346, 260, o);
+    std::vector<yelan::run::Pose> poses;
+    const auto keep = [&](const yelan::run::Pose& p) { poses.push_back(p); };
+    pipe.push(ev, keep);
+    pipe.finish(ev.back().t, keep);
+    CHECK(pipe.stats().gap_ticks > 100);
+    const auto gap = std::find_if(poses.begin(), poses.end(), [&](const auto& p) { return p.t_us > ev[n - 1].t + 2000000; });
+    REQUIRE(std::distance(gap, poses.end()) >= 5);
+    yelan::run::PresenceSmoother by_hand(5);
+    by_hand.start_empty(gap->t_us - 20000);
+    for (auto p = gap; p != poses.end(); ++p) {
+      CHECK(p->confidence ==
+            Approx(yelan::run::presence_probability_of_feature(by_hand.update(p->mask_share, p->t_us), 1, 4)).margin(1e-4));
+    }
   }
   // run.mask_cut is where stage 1's masks are cut: a higher cut never covers more of the
   // frame (the same net: same seed; stage 1 on every tick).
@@ -739,6 +771,7 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(contains(run_cli({"weights", "inspect", d / "m.h5"}).out, "\"mask_cut\""));
 }
 
+#include "camera/io/event_reader.h"
 #include "camera/sim/recording_reader.h"
 #include "engine/run/early_exit.h"
 

@@ -372,7 +372,7 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
       m.stats.gap_ticks += std::uint64_t(skip);
       m.slot = 0;
       m.have_masks = false;
-      m.smoother.start_empty(e.t);
+      m.smoother.start_empty(m.next_tick - m.dt_us);  // one period before the first tick after the gap
     }
     while (e.t > m.next_tick) {
       m.tick(m.next_tick, out);

@@ -50,9 +50,9 @@ double presence_log_loss(const std::vector<PresenceSample>& samples, double a, d
 // Each sample's smoothed feature (a new recording wherever the name changes or time goes back).
 std::vector<double> presence_features(const std::vector<PresenceSample>& samples, double tau_s);
 
-// Seconds until the verdict flips (P crosses 0.5) after the share steps from `from` to `to`
-// and stays (smoothing alone, ticks taken as continuous): 0 where P at `to` is already on the
-// other side at once, infinity where it never gets there.
+// Seconds until the verdict is the one the share `to` gives, after the share steps from
+// `from` to `to` and stays (smoothing alone, ticks taken as continuous): 0 where the verdict
+// at `from` is already that one, infinity where the smoothed P never crosses 0.5.
 double presence_latency_s(double a, double b, double tau_s, double from, double to);
 
 // The largest change in P(person) between calibrations x and y over the shares a mask can
