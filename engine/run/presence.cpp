@@ -16,8 +16,6 @@ namespace yelan::run {
 
 namespace {
 
-double sigmoid(double z) { return 1 / (1 + std::exp(-z)); }
-
 // Both classes' weights (each half), refusing samples of one class alone.
 std::array<double, 2> class_weights(const std::vector<PresenceSample>& samples) {
   double n_pos = 0, n_neg = 0;
@@ -98,7 +96,7 @@ PresenceFit fit_presence(const std::vector<PresenceSample>& samples, double tau_
     double ga = ridge * a, gb = 0, haa = ridge, hab = 0, hbb = 1e-9;
     for (std::size_t i = 0; i < samples.size(); ++i) {
       const auto& s = samples[i];
-      const double x = xs[i], p = sigmoid(a * x + b), w = s.person ? w_pos : w_neg;
+      const double x = xs[i], p = presence_probability_of_feature(x, a, b), w = s.person ? w_pos : w_neg;
       const double r = w * (p - (s.person ? 1.0 : 0.0)), h = w * p * (1 - p);
       ga += r * x, gb += r;
       haa += h * x * x, hab += h * x, hbb += h;
