@@ -1,6 +1,7 @@
 // `yelan bench sim [--duration 2s] [--threads-list 1,2] [--character ben] [--motion 05_04]
-// [--view front] [--json]`: the simulator's speed as simulated seconds per wall second
-// (above 1 is faster than real time) for each lighting x background, on each thread count,
+// [--view front] [--presets P1,P2] [--json]`: the simulator's speed as simulated seconds per
+// wall second (above 1 is faster than real time) for each lighting x background (or each
+// preset named), on each thread count,
 // with the split between rendering and the pixel model; and the event rate it produces
 // against the real DAVIS346 recording in ../shared/data/events (read in the same run).
 #pragma once

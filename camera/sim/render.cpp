@@ -741,6 +741,13 @@ void Renderer::render(double t_s, const std::vector<Primitive>& dynamic_prims,
   m.frame(m.light.flicker(t_s), out);
 }
 
+void Renderer::render_unflickered(const std::vector<Primitive>& dynamic_prims, RenderedFrame& out) {
+  Impl& m = *impl_;
+  if (!m.ready) throw std::logic_error("Renderer::render_unflickered before set_static");
+  m.dyn.build(dynamic_prims, m.cam, m.ntx, m.nty);
+  m.frame(1.0, out);
+}
+
 void render(const CameraModel& cam, const std::vector<Primitive>& prims, const Lighting& light,
             double t_s, RenderedFrame& out, const RenderOptions& options) {
   Renderer r(options);

@@ -67,6 +67,9 @@ class Renderer {
   // that miss the moving primitives take the layer's pixel average instead of being shaded
   // one by one (a difference within the texture's variation inside one pixel).
   void render(double t_s, const std::vector<Primitive>& dynamic_prims, RenderedFrame& out);
+  // The same without flicker: the caller applies Lighting::flicker itself (the simulator
+  // does, per pixel step, so flicker does not force keyframes at the pixel rate).
+  void render_unflickered(const std::vector<Primitive>& dynamic_prims, RenderedFrame& out);
 
   const CameraModel& camera() const;
 

@@ -243,7 +243,7 @@ void set_low_light_dn(SceneConfig& scene, std::optional<double> dn) {
 }
 
 Scene::Scene(const SceneConfig& config)
-    : config_(config), light_(lighting(config.light, config.flicker)), renderer_(config.render) {
+    : config_(config), light_(lighting(config.light, config.flicker)), renderer_(config.render), moving_(config.render) {
   if (config.light_dn) {
     if (!(*config.light_dn > 0 && *config.light_dn <= 1e5))
       throw std::invalid_argument("scene: light_dn " + std::to_string(*config.light_dn) + " must be in (0, 1e5]");
@@ -449,17 +449,21 @@ void Scene::dynamic_primitives(double t_s, std::vector<Primitive>& out) const {
   }
 }
 
-void Scene::render(double t_s, const std::vector<Primitive>& human, RenderedFrame& out) {
+void Scene::render(double t_s, const std::vector<Primitive>& human, RenderedFrame& out, bool flicker) {
   frame_prims_.clear();
   frame_prims_.insert(frame_prims_.end(), human.begin(), human.end());
   dynamic_primitives(t_s, frame_prims_);
-  if (config_.camera_motion == SceneConfig::still) {
-    renderer_.render(t_s, frame_prims_, out);
-    return;
+  Renderer* r = &renderer_;
+  if (config_.camera_motion != SceneConfig::still) {
+    // A moving camera sees the static layer move too: the whole frame, from scratch.
+    frame_prims_.insert(frame_prims_.end(), static_.begin(), static_.end());
+    moving_.set_static(camera_at(t_s), {}, light_);
+    r = &moving_;
   }
-  // A moving camera sees the static layer move too: the whole frame, from scratch.
-  frame_prims_.insert(frame_prims_.end(), static_.begin(), static_.end());
-  sim::render(camera_at(t_s), frame_prims_, light_, t_s, out, config_.render);
+  if (flicker)
+    r->render(t_s, frame_prims_, out);
+  else
+    r->render_unflickered(frame_prims_, out);
 }
 
 std::string Scene::description() const {

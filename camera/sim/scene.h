@@ -96,8 +96,9 @@ class Scene {
   const Lighting& light() const { return light_; }
   const SceneConfig& config() const { return config_; }
 
-  // Renders the dancer's primitives (those flagged human make the mask) in the scene at t.
-  void render(double t_s, const std::vector<Primitive>& human, RenderedFrame& out);
+  // Renders the dancer's primitives (those flagged human make the mask) in the scene at t;
+  // without the lamp's flicker when `flicker` is false (its factor is light().flicker(t)).
+  void render(double t_s, const std::vector<Primitive>& human, RenderedFrame& out, bool flicker = true);
 
   // What the scene adds: fixed primitives, and the moving ones at time t.
   const std::vector<Primitive>& static_primitives() const { return static_; }
@@ -115,6 +116,9 @@ class Scene {
   SceneConfig config_;
   Lighting light_;
   Renderer renderer_;
+  // A moving camera's frames, each rendered whole: one renderer kept, so its buffers are
+  // not allocated and faulted in anew on every frame.
+  Renderer moving_;
   Vec3 ahead_, right_;  // horizontal unit vectors: camera towards the body, image right
   double wall_mm_ = 0;
   std::vector<Primitive> static_;

@@ -106,7 +106,10 @@ class Simulator {
   Label label_at(double t_s) const;
 
  private:
-  void sample(double t_s);  // pose -> clothes -> render into frame_
+  void sample(double t_s);  // pose -> clothes -> render into frame_ (without flicker)
+  // `intensity` (a frame's pixels) under the lamp at t_s: itself, or its copy in lit_ times
+  // the flicker factor.
+  const float* lit(const float* intensity, double t_s);
   double motion_time(double t_s) const;  // clips longer than their motion play back and forth
   double image_speed(const BodyPose& a, const BodyPose& b, double dt) const;  // px/s, fastest body point
   BodyPose pose_{}, prev_pose_{};
@@ -121,7 +124,7 @@ class Simulator {
   std::vector<Primitive> prims_;
   std::vector<Event> events_;
   double t_ = 0, pixel_dt_ = 0, render_dt_ = 0;
-  std::vector<float> prev_intensity_, interp_;
+  std::vector<float> prev_intensity_, interp_, lit_;
   std::int64_t next_label_ = 0, next_mask_ = 0;  // tick indices
   bool started_ = false;
   SimStats stats_;

@@ -53,7 +53,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames"},
-               {"--occlusion", "--resume", "--quiet"});
+               {"--occlusion", "--warp", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
   const auto data = a.value("--data");
@@ -127,6 +127,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.warmup_steps = a.int_value_or("--warmup-steps", std::min<int>(100, int(spec.steps / 10)), 0, 1 << 30);
   spec.history_s = a.number_or("--history", 5, 0, 60);
   spec.occlusion = a.flag("--occlusion");
+  spec.warp = a.flag("--warp");
+  if (spec.warp && spec.stage != "pose") throw UsageError("--warp: for --stage pose only");
   spec.mask_weights = a.value_or("--mask-weights", "");
   spec.init_weights = a.value_or("--init", "");
   spec.checkpoint_minutes = a.number_or("--checkpoint-minutes", 10, 0, 1e6, true);

@@ -79,7 +79,7 @@ const std::vector<Command>& commands() {
        "                   [--steps 1000] [--batch 8] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
        "                   [--lr-schedule cosine|step] [--warmup-steps N] [--history 5] [--val-windows N]\n"
        "                   [--stop-at STEP] [--mask-frames F]\n"
-       "                   [--occlusion] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
+       "                   [--occlusion] [--warp] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
        "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
        "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
        "at each frame, downscaled to the config's input. mask: the U-Net learns the current and\n"
@@ -97,7 +97,10 @@ const std::vector<Command>& commands() {
        "best.h5 and final.h5; --resume continues from the checkpoint bit-exactly.\n"
        "--mask-frames F (mask stage): training windows of F frames instead of the config's S (the\n"
        "U-Net sees one frame at a time: windows of 1 frame give S times the distinct samples per\n"
-       "step's cost); validation keeps S.\n",
+       "step's cost); validation keeps S.\n"
+       "--warp (pose stage): each training window's input and joints under one random\n"
+       "similarity (scale 0.8-1.25, rotation +-15 deg, shift +-10% of the frame), as a camera\n"
+       "rolled and panned and the dancer nearer or farther; validation is never warped.\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
@@ -175,7 +178,7 @@ const std::vector<Command>& commands() {
        "                          [--reps N] [--only NAME] [--chart FILE.svg] [--from RESULTS.json]\n"
        "       yelan bench events [--json]\n"
        "       yelan bench networks [--configs paper,small,tiny] [--threads-list 1,2] [--window W] [--json]\n"
-       "       yelan bench sim [--duration 2] [--threads-list 1,2] [--character ben] [--motion 05_04] [--json]\n"
+       "       yelan bench sim [--duration 2] [--threads-list 1,2] [--character ben] [--motion 05_04] [--presets P1,P2] [--json]\n"
        "       yelan bench run [--configs small,paper] [--threads-list 1,2] [--rate 50] [--beta B] [--weights W1,W2]\n"
        "                       [--crop-margin PX] [--no-torch] [--json]\n"
        "       yelan bench early-exit --weights W [--values 0.5,...,0.99,1.01] [--scenes 12] [--seed 1] [--chart F.svg] [--json]\n"
@@ -193,7 +196,8 @@ const std::vector<Command>& commands() {
        "contains NAME ('memory', 'convlstm.step' for those groups). --from: re-print the\n"
        "table (and --chart) of a saved --json run without measuring.\n"
        "sim: simulated seconds per wall second for each lighting x background, the shares\n"
-       "of rendering and the pixel model, and events/s against the real DAVIS346 recording.\n"
+       "of rendering and the pixel model, and events/s against the real DAVIS346 recording;\n"
+       "--presets: the named scenes instead (e.g. the costly kinds: -flicker, -sweep, -clutter).\n"
        "run: the streaming pipeline per config and thread count: poses/s, per-tick p50/p99 split\n"
        "by stage (TORE, stage 1, stage 2) and the share of ticks that ran stage 1; at each model's\n"
        "own run.beta (its shipped setting; 0.99 without one) unless --beta is given.\n"

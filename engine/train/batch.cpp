@@ -65,8 +65,9 @@ std::array<std::uint8_t, kJoints> valid_joints(const Batch& b, int f) {
   return valid;
 }
 
-void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ) {
+void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ, const Similarity* warp) {
   if (used_ >= windows_) throw std::logic_error("batch is full");
+  if (warp && source_ == MaskSource::none) throw std::logic_error("the geometric augmentation is for the pose stage");
   const int S = cfg_.window, d = cfg_.downscale, H = cfg_.height(), W = cfg_.width();
   const int sw = w.camera.width, sh = w.camera.height;
   if (sw != cfg_.sensor_width || sh != cfg_.sensor_height)
@@ -98,13 +99,19 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
         input::apply_mask(in, n, keep);
       }
     }
-    // Targets: the joints normalised with the true head depth.
-    const double zr = f.joints_mm[0].z();
+    // Targets: the joints normalised with the true head depth (both warped with the input).
+    const double zr0 = f.joints_mm[0].z();
+    const double zr = warp ? zr0 / warp->scale : zr0;
     b_.z_ref[std::size_t(n)] = zr;
     for (int j = 0; j < kJoints; ++j) {
-      const std::array<double, 3> p{f.joints_mm[j].x(), f.joints_mm[j].y(), f.joints_mm[j].z()};
+      std::array<double, 3> p{f.joints_mm[j].x(), f.joints_mm[j].y(), f.joints_mm[j].z()};
+      bool ok = f.valid[j] && p[2] > 1 && zr0 > 1;
+      if (warp && ok) {
+        p = warp_joint(*warp, p, b_.k, zr0);
+        const double u = b_.k.fx * p[0] / p[2] + b_.k.cx, v = b_.k.fy * p[1] / p[2] + b_.k.cy;
+        ok = p[2] > 1 && u >= 0 && u < sw && v >= 0 && v < sh;  // still in the picture
+      }
       b_.truth_mm[std::size_t(n)][j] = p;
-      const bool ok = f.valid[j] && p[2] > 1 && zr > 1;
       const auto q = ok ? normalise_joint(p, b_.k, zr) : std::array<double, 3>{0, 0, 0};
       for (int c = 0; c < 3; ++c) b_.target[(std::size_t(n) * kJoints + j) * 3 + c] = float(q[c]);
       b_.valid[std::size_t(n) * kJoints + j] = ok ? 1.f : 0.f;
@@ -128,6 +135,9 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
       input::apply_mask(in, used_ * S + t, keep);
     }
   }
+  // Last, so the input is warped whole, masks and occluders with it.
+  if (warp)
+    for (int t = 0; t < S; ++t) warp_frame(in, used_ * S + t, *warp, d, sw, sh);
   ++used_;
 }
 

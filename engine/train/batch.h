@@ -10,6 +10,7 @@
 #include "engine/input.h"
 #include "engine/mask_net.h"
 #include "engine/model_config.h"
+#include "engine/train/augment.h"
 #include "engine/train/metrics.h"
 #include "engine/train/pose_norm.h"
 #include "layers/param.h"
@@ -48,7 +49,9 @@ class BatchBuilder {
   void clear() { used_ = 0; }
   // Appends one window (its first cfg.window frames are inputs; the mask stage's labels
   // use the frames after them too). `mask_net` runs (frozen) for MaskSource::net only.
-  void add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occlusion);
+  // `warp` (pose stage only): one similarity for the whole window, input and joints.
+  void add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occlusion,
+           const Similarity* warp = nullptr);
   const Batch& batch() const { return b_; }
   MaskSource source() const { return source_; }
 

@@ -219,6 +219,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.lr_schedule != "cosine" && spec.lr_schedule != "step")
     throw std::invalid_argument("LR schedule must be cosine or step, got '" + spec.lr_schedule + "'");
   const bool cosine = spec.lr_schedule == "cosine";
+  if (spec.warp && !pose_stage) throw std::invalid_argument("the geometric augmentation (warp) is for the pose stage");
   if (spec.mask_frames < 0 || (pose_stage && spec.mask_frames > 0))
     throw std::invalid_argument("frames per mask window: the mask stage only, and >= 1");
   // The training windows' shape; validation, weights and the saved config keep cfg's.
@@ -255,7 +256,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"steps", spec.steps},           {"steps_per_epoch", spec.steps_per_epoch},
                                       {"lr", spec.adam.lr},            {"lr_schedule", spec.lr_schedule},
                                       {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
-                                      {"occlusion", spec.occlusion},   {"seed", spec.seed},
+                                      {"occlusion", spec.occlusion},   {"warp", spec.warp},
+                                      {"seed", spec.seed},
                                       {"mask_weights", spec.mask_weights}, {"init_weights", spec.init_weights},
                                       {"train_recordings", train_files.size()}, {"val_recordings", val_files.size()},
                                       {"val_windows", spec.val_windows}, {"config_json", cfg.json},
@@ -459,7 +461,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       sim::SimWindow w;
       stream.next(w);
       sim::Rng occ(spec.seed, 0x0cc1u + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
-      builder.add(w, mask, spec.occlusion ? &occ : nullptr);
+      // Its own stream, so the occluders of a run with --warp are those of one without.
+      sim::Rng wr(spec.seed, 0x3a9fu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
+      const Similarity warp = draw_similarity(wr, cfg.sensor_width, cfg.sensor_height);
+      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr);
     }
     const double built = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     data_s += built;

@@ -49,6 +49,7 @@ struct TrainSpec {
   double history_s = 5;
   double checkpoint_minutes = 10;
   bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
+  bool warp = false;                // pose stage: a random similarity per window (augment.h)
   std::string mask_weights;         // pose stage: frozen mask net; empty: the true mask
   std::string init_weights;         // start from these instead of a random initialisation
   std::string out_dir;

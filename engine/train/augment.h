@@ -1,0 +1,34 @@
+// Geometric augmentation of a training window: one random similarity (scale, in-plane
+// rotation, shift) applied to every frame's input and to the joints, as if the camera had
+// rolled, panned and the dancer stood nearer or farther. The joints stay a 3D pose whose
+// projection is the warped picture: image points move with the warp, and the body moves
+// along the optical axis so that its head's depth is z_ref / scale.
+#pragma once
+#include <array>
+
+#include "camera/sim/rng.h"
+#include "engine/train/pose_norm.h"
+#include "layers/param.h"
+
+namespace yelan::train {
+
+struct Similarity {
+  double scale = 1, angle_rad = 0, shift_x = 0, shift_y = 0;  // shifts in sensor pixels
+};
+
+// scale log-uniform in [0.8, 1.25], angle within +-15 deg, shifts within +-10% of the frame.
+Similarity draw_similarity(camera::sim::Rng& r, int sensor_w, int sensor_h);
+
+// Sensor point (u, v) under the warp, about the frame's centre.
+std::array<double, 2> warp_point(const Similarity& s, double u, double v, int sensor_w, int sensor_h);
+
+// Frame n of `a` (an input at 1/d of the sensor) resampled bilinearly under the warp, every
+// channel; what falls outside the frame reads 0 (no events).
+void warp_frame(const layers::Act& a, int n, const Similarity& s, int d, int sensor_w, int sensor_h);
+
+// A camera-frame joint (mm) under the warp, and the head depth that goes with it
+// (z_ref / scale): its projection is warp_point of the joint's, its depth offset from the
+// head unchanged.
+std::array<double, 3> warp_joint(const Similarity& s, const std::array<double, 3>& p, const Intrinsics& k, double z_ref);
+
+}  // namespace yelan::train

@@ -1,0 +1,115 @@
+// The geometric augmentation: a warped picture and its warped joints agree, the identity
+// changes nothing, and the trainer's batch carries both.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "camera/sim/presets.h"
+#include "camera/sim/window_stream.h"
+#include "engine/train/augment.h"
+#include "engine/train/batch.h"
+#include "layers/buffer.h"
+
+using namespace yelan::train;
+
+namespace {
+
+// Centre of mass of channel c of frame 0, in sensor pixels, and its total.
+std::array<double, 3> centroid(const yelan::layers::Act& a, int c, int d) {
+  double sx = 0, sy = 0, m = 0;
+  for (int y = 0; y < a.h; ++y)
+    for (int x = 0; x < a.w; ++x) {
+      const double v = a.data[(std::size_t(y) * a.w + x) * 16 + c];
+      sx += v * (x + 0.5) * d, sy += v * (y + 0.5) * d, m += v;
+    }
+  return {sx / m, sy / m, m};
+}
+
+}  // namespace
+
+TEST_CASE("augment: a warped frame moves a blob where warp_point moves its centre", "[train]") {
+  const int d = 2, sw = 346, sh = 260;
+  yelan::layers::ActBuf buf;
+  buf.resize(1, 6, sh / d, sw / d);
+  const yelan::layers::Act& a = buf.act;
+  std::fill(a.data, a.data + a.floats(), 0.f);
+  const double bx = 60.3, by = 40.7;  // cells
+  for (int y = 0; y < a.h; ++y)
+    for (int x = 0; x < a.w; ++x) {
+      const double r2 = (x - bx) * (x - bx) + (y - by) * (y - by);
+      a.data[(std::size_t(y) * a.w + x) * 16 + 0] = float(std::exp(-r2 / 18));
+      a.data[(std::size_t(y) * a.w + x) * 16 + 5] = float(0.5 * std::exp(-r2 / 18));
+    }
+  const auto before = centroid(a, 0, d);
+  const Similarity s{1.15, 0.2, 12, -7};
+  warp_frame(a, 0, s, d, sw, sh);
+  const auto want = warp_point(s, before[0], before[1], sw, sh);
+  for (int c : {0, 5}) {
+    const auto after = centroid(a, c, d);
+    CHECK(after[0] == Approx(want[0]).margin(0.3));
+    CHECK(after[1] == Approx(want[1]).margin(0.3));
+  }
+  CHECK(centroid(a, 0, d)[2] == Approx(before[2] * s.scale * s.scale).epsilon(0.03));  // the area grows
+  // Rotating by a quarter turn about the centre takes a point right of it below it.
+  const auto q = warp_point({1, 3.141592653589793 / 2, 0, 0}, 173 + 10, 130, sw, sh);
+  CHECK(q[0] == Approx(173).margin(1e-9));
+  CHECK(q[1] == Approx(140).margin(1e-9));
+  // Shifted out of the frame, nothing is left.
+  warp_frame(a, 0, {1, 0, double(sw), 0}, d, sw, sh);
+  CHECK(centroid(a, 0, d)[2] == 0);
+}
+
+TEST_CASE("augment: a warped joint projects where the warp moves its image point, its depth offset kept", "[train]") {
+  const Intrinsics k{485, 480, 171, 128, 346, 260};
+  const std::array<double, 3> p{-300, 200, 3800};
+  const double zr = 3500;
+  const Similarity s{0.85, -0.15, -20, 9};
+  const auto q = warp_joint(s, p, k, zr);
+  const auto uv = warp_point(s, k.fx * p[0] / p[2] + k.cx, k.fy * p[1] / p[2] + k.cy, k.width, k.height);
+  CHECK(k.fx * q[0] / q[2] + k.cx == Approx(uv[0]).margin(1e-9));
+  CHECK(k.fy * q[1] / q[2] + k.cy == Approx(uv[1]).margin(1e-9));
+  CHECK(q[2] - zr / s.scale == Approx(p[2] - zr).margin(1e-9));
+  CHECK(warp_joint(s, {0, 0, zr}, k, zr)[2] == Approx(zr / s.scale));
+  const auto same = warp_joint(Similarity{}, p, k, zr);
+  for (int i = 0; i < 3; ++i) CHECK(same[i] == Approx(p[i]).margin(1e-9));
+}
+
+TEST_CASE("augment: the batch under the identity warp is the plain batch, and under a warp its targets are the warped joints", "[train]") {
+  namespace sim = yelan::camera::sim;
+  const yelan::ModelConfig cfg = yelan::load_model_config(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-nomask.json");
+  sim::WindowStreamOptions o;
+  o.window = cfg.window;
+  o.warmup_s = 0.04;
+  o.scene_s = 0.04 + o.window / o.frame_hz + 1e-6;
+  sim::SimWindowStream stream({sim::preset_spec("ben-dance7-front-high-static")}, 5, o);
+  sim::SimWindow w;
+  stream.next(w);
+  yelan::MaskNet unused(cfg);
+  BatchBuilder plain(cfg, 1, MaskSource::truth), same(cfg, 1, MaskSource::truth), warped(cfg, 1, MaskSource::truth);
+  plain.add(w, unused, nullptr);
+  const Similarity id{}, s{1.2, 0.25, 15, -10};
+  same.add(w, unused, nullptr, &id);
+  warped.add(w, unused, nullptr, &s);
+  const Batch &a = plain.batch(), &b = same.batch(), &c = warped.batch();
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < a.input.act.floats(); ++i) differ += std::abs(a.input.act.data[i] - b.input.act.data[i]) > 1e-6f;
+  CHECK(differ == 0);
+  for (std::size_t i = 0; i < a.target.size(); ++i) REQUIRE(a.target[i] == Approx(b.target[i]).margin(1e-9));
+  int checked = 0;
+  for (int f = 0; f < cfg.window; ++f) {
+    const auto& fr = w.frames[std::size_t(f)];
+    const double zr = fr.joints_mm[0].z();
+    CHECK(c.z_ref[std::size_t(f)] == Approx(zr / s.scale));
+    for (int j = 0; j < kJoints; ++j) {
+      if (!c.valid_u8[std::size_t(f) * kJoints + j]) continue;
+      const auto q = warp_joint(s, {fr.joints_mm[j].x(), fr.joints_mm[j].y(), fr.joints_mm[j].z()}, c.k, zr);
+      const auto n = normalise_joint(q, c.k, zr / s.scale);
+      for (int i = 0; i < 3; ++i) REQUIRE(c.target[(std::size_t(f) * kJoints + j) * 3 + i] == Approx(n[i]).margin(1e-6));
+      ++checked;
+    }
+  }
+  CHECK(checked > cfg.window * 8);
+  // The mask stage's labels are not warped: asking is a mistake.
+  BatchBuilder masks(cfg, 1, MaskSource::none);
+  CHECK_THROWS_WITH(masks.add(w, unused, nullptr, &s), Catch::Contains("pose stage"));
+}
