@@ -4,7 +4,7 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|fit16|save|restore|combine|all]
+#   benchmarks/training/campaign.sh [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|fit16|save|restore|combine|all]
 #   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
@@ -74,6 +74,8 @@ dataset_s4() {
     --random-looks --frame-dancer --train-rooms "${ROOMS_TRAIN:-32}" --val-rooms "${ROOMS_VAL:-8}" --threads "${THREADS:-2}"
 }
 
+# Made from nothing (no ds-s4 beside it) it simulates all 400 members: 1.29 CPU-h on
+# 2026-11-28 with the simulator's faster flicker (whose members differ from the first ds-s5's).
 # ds-s4 with twice the furnished rooms and dancers in furnished rooms (their camera still,
 # panning, shaking or sweeping): stage 1 said "person" on 16% of ds-s4's validation room
 # ticks, most of them low-light rooms whose walkers and furniture it took for a dancer, and
@@ -210,6 +212,24 @@ case "$what" in
       --init "${MASK_S4_INIT:-models/default.h5}" ;;
   # Stage 1 again, from the shipped mask net (MASK_S5_INIT: `git show c367f95:models/default.h5`,
   # whose mask net is mask-s4's final step) on ds-s5: rooms and dancers among furniture.
+  # The shipped pose net on ds-s5 (ds-s3's dancers and dancers among furniture), a short
+  # cosine as pose-s3 on ds-s3: the control of the warp A/B below.
+  train-pose-s5)
+    CFG=benchmarks/configs/small-pose0.125-nomask.json DATA=$DATA_S5 train pose pose-s5 \
+      "${POSE_S5_STEPS:-1000}" --occlusion --lr 3e-4 --init "${POSE_S5_INIT:-models/default.h5}" ;;
+  # The same with --warp (a random similarity per window: scale 0.8-1.25, roll +-15 deg,
+  # shift +-10%): the net memorises its recordings (fit16: 101 mm on 16 it trained on, at the
+  # floor on new people), and the warp makes every window a new picture of its pose.
+  train-pose-s5-warp)
+    CFG=benchmarks/configs/small-pose0.125-nomask.json DATA=$DATA_S5 train pose pose-s5-warp \
+      "${POSE_S5_STEPS:-1000}" --occlusion --warp --lr 3e-4 --init "${POSE_S5_INIT:-models/default.h5}" ;;
+  # Both side by side, one thread each: the same windows, steps and schedule. Run 2026-11-28
+  # (init: commit 7f069ff's default): ds-s5 val 204.9 mm (control) and 209.0 (warp) against
+  # the init's 217.2; paired by recording +3.6 +- 4.2 mm for the warp (models/README).
+  ab-warp)
+    "$0" train-pose-s5 &
+    "$0" train-pose-s5-warp &
+    wait ;;
   train-mask-s5)
     DATA=$DATA_S5 BATCH=32 train mask mask-s5 "${MASK_S5_STEPS:-500}" --lr 3e-4 --mask-frames 1 \
       --init "${MASK_S5_INIT:-models/default.h5}" ;;
@@ -234,7 +254,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
@@ -275,5 +295,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|fit16|save|restore|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|fit16|save|restore|combine|all]" >&2; exit 2 ;;
 esac
