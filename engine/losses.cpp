@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 #include "kernels/heatmap.h"
 
@@ -111,42 +113,66 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const floa
   return out;
 }
 
-MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std::vector<float>& dscores) {
+MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std::vector<float>& dscores,
+                   const std::vector<float>& sample_weights) {
   const Act& m = net.masks();
   const int n = m.n, N = m.c;
   const std::size_t P = m.pixels();
+  if (!sample_weights.empty() && sample_weights.size() != std::size_t(n))
+    throw std::invalid_argument("mask loss: " + std::to_string(sample_weights.size()) + " sample weights for " +
+                                std::to_string(n) + " samples");
+  auto weight = [&](int i) { return sample_weights.empty() ? 1.0 : double(sample_weights[std::size_t(i)]); };
+  double total_w = 0;
+  for (int i = 0; i < n; ++i) total_w += weight(i);
+  if (!(total_w > 0)) throw std::invalid_argument("mask loss: the sample weights sum to " + std::to_string(total_w));
   MaskLoss out;
   std::memset(dmasks.data, 0, dmasks.floats() * sizeof(float));
-  const double n_first = double(n) * P, n_all = double(n) * N * P;
+  const double n_first = total_w * P, n_all = total_w * N * P;
   std::vector<double> score_gt(std::size_t(n) * N, 0.0);
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < n; ++i) {
+    const double wi = weight(i);
     for (int c = 0; c < N; ++c) {
       const std::size_t off = (std::size_t(i) * m.cb() + c / 16) * P * 16 + c % 16;
       double abs_sum = 0;
       for (std::size_t p = 0; p < P; ++p) {
         const double x = m.data[off + p * 16], y = labels.data[off + p * 16];
-        const double l = std::max(x, 0.0) - x * y + std::log1p(std::exp(-std::abs(x)));
+        const double l = wi * (std::max(x, 0.0) - x * y + std::log1p(std::exp(-std::abs(x))));
         const double s = 1.0 / (1.0 + std::exp(-x));
         out.bce_all += l / n_all;
-        double g = (s - y) / n_all;
+        double g = wi * (s - y) / n_all;
         if (c == 0) {
           out.bce_first += l / n_first;
-          g += (s - y) / n_first;
+          g += wi * (s - y) / n_first;
         }
         dmasks.data[off + p * 16] = float(g);
         abs_sum += std::abs(s - y);
       }
       score_gt[std::size_t(i) * N + c] = 1.0 - abs_sum / double(P);
     }
+  }
   dscores.assign(std::size_t(n) * N, 0.f);
   const auto& s = net.scores();
+  const double n_scores = total_w * N;
   for (std::size_t k = 0; k < s.size(); ++k) {
+    const double wi = weight(int(k / std::size_t(N)));
     const double d = s[k] - score_gt[k];
-    out.score_mse += d * d / double(s.size());
-    dscores[k] = float(2.0 * d / double(s.size()));
+    out.score_mse += wi * d * d / n_scores;
+    dscores[k] = float(2.0 * wi * d / n_scores);
   }
   out.total = out.bce_first + out.bce_all + out.score_mse;
   return out;
+}
+
+std::vector<float> nobody_weights(const Act& labels, float nobody) {
+  std::vector<float> w(std::size_t(labels.n), 1.f);
+  const std::size_t P = labels.pixels();
+  for (int i = 0; i < labels.n; ++i) {
+    const float* first = labels.data + std::size_t(i) * labels.cb() * P * 16;  // channel 0
+    bool anyone = false;
+    for (std::size_t p = 0; p < P && !anyone; ++p) anyone = first[p * 16] > 0.5f;
+    if (!anyone) w[std::size_t(i)] = nobody;
+  }
+  return w;
 }
 
 }  // namespace yelan

@@ -35,9 +35,16 @@ struct MaskLoss {
 };
 
 // labels: the same blocked layout and shape as net.masks(). dmasks gets dL/dlogits;
-// dscores (n x N) dL/dscores.
+// dscores (n x N) dL/dscores. sample_weights (n, or empty for 1 each): every term is a
+// weighted mean over the samples, sum w_i x_i / sum w_i, so the loss stays on the scale of
+// the unweighted one while some samples pull harder than others.
 MaskLoss mask_loss(const MaskNet& net, const layers::Act& labels, const layers::Act& dmasks,
-                   std::vector<float>& dscores);
+                   std::vector<float>& dscores, const std::vector<float>& sample_weights = {});
+
+// One weight per sample: `nobody` where the sample's current-frame label (channel 0) is
+// empty (a scene with nobody in the picture), 1 elsewhere. Stage 1's false alarms are whole
+// empty rooms where it draws a dancer-sized blob; weighting them asks it to stop.
+std::vector<float> nobody_weights(const layers::Act& labels, float nobody);
 
 // The normalised target Gaussian of one joint on an h x w map (sum 1), as a plain array.
 void target_gaussian(float mu_w, float mu_h, int h, int w, float sigma_px, float* out);

@@ -50,6 +50,8 @@ struct TrainSpec {
   double checkpoint_minutes = 10;
   bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
   bool warp = false;                // pose stage: a random similarity per window (augment.h)
+  float empty_weight = 1;           // mask stage: a window showing nobody weighs this much in
+                                    // the loss (nobody_weights); validation is never weighted
   std::string mask_weights;         // pose stage: frozen mask net; empty: the true mask
   std::string init_weights;         // start from these instead of a random initialisation
   std::string out_dir;
