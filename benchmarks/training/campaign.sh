@@ -4,7 +4,7 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|train-mask-s7|train-mask-s7-empty|ab-empty|fit16|save|restore|combine|all]
+#   benchmarks/training/campaign.sh [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|dataset-s6|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|train-mask-s7|train-mask-s7-empty|ab-empty|fit16|save|restore|combine|all]
 #   (default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
@@ -87,6 +87,19 @@ dataset_s5() {
     --threads "${THREADS:-2}"
 }
 
+# ds-s5 with three times the scenes with nobody in validation (24 empty scenes, 48 furnished
+# rooms) and twice in training (96, 128): on the test split of seed 20261208 the shipped stage 1
+# called "person" on 8 of 32 scenes with nobody, mostly high light with a moving background,
+# a kind validation's 24 such scenes never showed; a split that selects for issue 16's 2%
+# needs more of them. Only the new members are simulated (about 40 CPU-min).
+DATA_S6=${DATA_S6:-/var/tmp/yelan-data/ds-s6}
+dataset_s6() {
+  link_splits "$DATA_S5" "$DATA_S6"
+  "$Y" sim --dataset "$DATA_S6" --seed 1 --train "${LOOKS_TRAIN:-200}" --val 32 --test 0 --train-empty 96 --val-empty 24 --duration 5s \
+    --random-looks --frame-dancer --train-rooms 128 --val-rooms 48 --train-dancer-rooms 24 --val-dancer-rooms 8 \
+    --threads "${THREADS:-2}"
+}
+
 dataset() {
   "$Y" sim --dataset "$DATA" --seed 1 --train 320 --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
     --low-light-dn 4 --threads 2
@@ -110,6 +123,7 @@ case "$what" in
   dataset-s3) dataset_s3 ;;
   dataset-s4) dataset_s4 ;;
   dataset-s5) dataset_s5 ;;
+  dataset-s6) dataset_s6 ;;
   train)
     "$0" train-mask-s2 &
     "$0" train-pose &
@@ -314,5 +328,5 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|train-mask-s7|train-mask-s7-empty|ab-empty|fit16|save|restore|combine|all]" >&2; exit 2 ;;
+  *) echo "usage: $0 [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|dataset-s6|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|train-mask-s7|train-mask-s7-empty|ab-empty|fit16|save|restore|combine|all]" >&2; exit 2 ;;
 esac
