@@ -4,8 +4,8 @@
 # thread pools on two cores), then combined. Every step resumes: the dataset keeps its done
 # files, and a training with a checkpoint continues bit-exactly (--resume), so the campaign
 # may be stopped and restarted over days. Logs and checkpoints go to $RUNS.
-#   benchmarks/training/campaign.sh [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|dataset-s6|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|train-mask-s7|train-mask-s7-empty|ab-empty|fit16|save|restore|combine|all]
-#   (default: all)
+#   benchmarks/training/campaign.sh [TARGET]   (`campaign.sh help` lists the targets: the case
+#   labels below, read from this file so the list cannot go stale; default: all)
 # Environment: Y (the yelan binary), DATA (dataset folder), RUNS (runs folder), CFG (config),
 # POSE_STEPS / MASK_STEPS (the runs' lengths: the cosine schedules' horizons).
 # THREADS (default 1: two runs side by side; 2 for one run alone, bit-exact either way).
@@ -117,6 +117,9 @@ train() {
 }
 
 mkdir -p "$RUNS"
+# The targets: the case labels of the dispatch below.
+targets() { sed -n 's/^  \([a-z0-9-]*\))\( .*\)\{0,1\}$/\1/p' "$0"; }
+
 case "$what" in
   dataset) dataset ;;
   dataset-looks) dataset_looks ;;
@@ -271,6 +274,13 @@ case "$what" in
     "$0" train-mask-s7 &
     "$0" train-mask-s7-empty &
     wait ;;
+  # Stage 1 on ds-s6 (ds-s5 with twice the training scenes with nobody and three times the
+  # validation ones): test-s8's false alarms are moving objects and rooms under a sweeping
+  # camera in high light, a kind ds-s5 holds a handful of. From the control mask-s7, 32
+  # one-frame windows a step, lr 2e-4 cosine; alone on the machine: THREADS=2.
+  train-mask-s8)
+    DATA=$DATA_S6 BATCH=32 train mask mask-s8 "${MASK_S8_STEPS:-700}" --lr 2e-4 --mask-frames 1 \
+      --init "${MASK_S8_INIT:-$RUNS/mask-s7/final.h5}" ;;
   # Can the shipped pose net fit 16 recordings? Every 12th dancer recording of ds-s3's
   # training split (16), trained and validated on the same 16 from the shipped net, lr 1e-3
   # cosine. Run 2026-11-27 (MPJPE 90 mm on them at step 250; stopped at 367): it memorises
@@ -287,7 +297,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
@@ -328,5 +338,6 @@ case "$what" in
     dataset
     "$0" train
     "$0" combine ;;
-  *) echo "usage: $0 [dataset|dataset-looks|dataset-s3|dataset-s4|dataset-s5|dataset-s6|train|train-mask|train-mask-neg|train-mask-s2|train-mask-looks|train-pose|train-pose-small|train-pose-looks|train-pose-looks-nomask|train-pose-looks-nomask2|train-pose-small-looks|train-pose-small-nomask|train-pose-full-nomask|train-pose-s3|train-mask-looks2|train-mask-s3|train-mask-s4|train-mask-s5|train-mask-s6|train-pose-s5|train-pose-s5-warp|ab-warp|train-mask-s7|train-mask-s7-empty|ab-empty|fit16|save|restore|combine|all]" >&2; exit 2 ;;
+  help) targets ;;
+  *) echo "usage: $0 [$(targets | paste -sd'|')]" >&2; exit 2 ;;
 esac
