@@ -90,6 +90,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     const json& r = section(d, "run", where);
     if (r.contains("beta")) c.run_beta = get_num(r, where + ".run", "beta");
     if (r.contains("depth_scale")) c.depth_scale = get_num(r, where + ".run", "depth_scale");
+    if (r.contains("depth_tau_s")) c.depth_tau_s = get_num(r, where + ".run", "depth_tau_s");
     if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");
     if (r.contains("presence")) {
       const json& pr = section(r, "presence", where + ".run");
@@ -105,6 +106,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.window >= 1, "input.window must be >= 1"},
       {c.crop_margin >= 0, "pose.crop_margin must be >= 0"},
       {c.presence_tau_s >= 0 && c.presence_tau_s <= 60, "run.presence.tau_s must lie in 0..60 (seconds)"},
+      {c.depth_tau_s >= 0 && c.depth_tau_s <= 60, "run.depth_tau_s must lie in 0..60 (seconds)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",
        "mask.role must be mask, presence or none"},
       {(c.mask_role == "mask") == c.masked_input,

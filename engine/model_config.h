@@ -44,12 +44,15 @@ struct ModelConfig {
   //   run.depth_scale: the body-height prior's head depth is multiplied by it (fitted by
   //   `yelan calibrate`: a net's skeletons are shorter than the bodies it saw, soft-argmax
   //   pulls joints toward the middle, so the prior alone puts the dancer too far away).
+  //   run.depth_tau_s (optional, default 0): the head depth's logarithm is averaged over
+  //   the ticks with a person, exponentially with this time constant (run::DepthSmoother).
   //   run.mask_cut: stage 1's masks are the pixels whose sigmoid exceeds it (default 0.1, a
   //   cut that keeps the dancer for a masked stage 2; `yelan calibrate --choose-mask-cut`
   //   picks the one of best IoU against the true masks).
   double run_beta = 0.99;
   double mask_cut = 0.1;
   double depth_scale = 1;
+  double depth_tau_s = 0;
   double presence_a = 3.0, presence_b = 13.8;
   double presence_tau_s = 0;
   bool presence_calibrated = false;

@@ -166,6 +166,12 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
     CHECK(bad_tau.code == 2);
     CHECK(contains(bad_tau.err, "run.presence.tau_s must lie in 0..60"));
   }
+  for (const char* tau : {"-0.1", "61"}) {
+    std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"depth_tau_s\": " << tau << "}}\n";
+    const auto bad_tau = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
+    CHECK(bad_tau.code == 2);
+    CHECK(contains(bad_tau.err, "run.depth_tau_s must lie in 0..60"));
+  }
   // run.presence.tau_s smooths ln(share + 0.001) over the ticks before the calibration:
   // each pose's confidence is the logistic of the smoothed feature of the shares so far
   // (the shipped model, whose masks change from tick to tick; the override is the config's).
@@ -824,4 +830,88 @@ TEST_CASE("run: the shipped model finds nobody in the real DAVIS346 recording (a
     INFO(rate << " per second: a person on " << person << " of " << rows.size() - 1 << " ticks");
     CHECK(person <= 0.05 * double(rows.size() - 1));
   }
+}
+
+TEST_CASE("run: the deployed head depth is averaged over the ticks with a person, and eval keeps its poses", "[run]") {
+  using yelan::run::DepthSmoother;
+  // ln(depth) averaged with time constant tau: after tau of a step, 1 - 1/e of the way in
+  // the logarithm, whatever the tick rate; no depth (0, NaN) passes through untouched.
+  DepthSmoother raw(0);
+  CHECK(raw.update(3000, 0) == Approx(3000).epsilon(1e-12));
+  CHECK(raw.update(4000, 20000) == Approx(4000).epsilon(1e-12));
+  for (const std::int64_t dt : {20000, 5000}) {
+    DepthSmoother s(0.5);
+    CHECK(s.update(3000, 0) == Approx(3000).epsilon(1e-12));
+    double z = 0;
+    for (std::int64_t t = dt; t <= 500000; t += dt) z = s.update(4000, t);
+    CHECK(std::log(z) == Approx(std::log(3000) + (1 - std::exp(-1.0)) * std::log(4000.0 / 3000)).epsilon(1e-9));
+    CHECK(s.update(0, 520000) == 0);
+    CHECK(std::isnan(s.update(std::nan(""), 540000)));
+    CHECK(s.update(4000, 540000) > z);  // the average went on from where it was
+    CHECK(s.update(2000, 100) == Approx(2000).epsilon(1e-12));  // time went back: a new recording
+    s.reset();
+    CHECK(s.update(5000, 600000) == Approx(5000).epsilon(1e-12));
+  }
+  // Through the pipeline (a net of random weights, whose depths wander from tick to tick):
+  // each smoothed depth is one step of that law from the previous one toward the tick's own
+  // prior, and the joints scale with it; a tick with nobody starts the average afresh.
+  yelan::test::CliTempDir d("run-depth-tau");
+  REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
+  std::ostringstream log;
+  const auto scenes = yelan::run::simulate_scenes({yelan::camera::sim::preset_spec("ben-dance3-front-high-static")}, 4, 0.4, 0.1, log);
+  yelan::run::RunOptions o;
+  o.beta = 1.01;
+  o.presence_ab = std::array<double, 2>{0, 30};  // a person on every tick
+  const auto unsmoothed = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
+  o.depth_tau_s = 0.1;
+  const auto smoothed = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
+  REQUIRE(unsmoothed.poses.size() >= 18);
+  REQUIRE(smoothed.poses.size() == unsmoothed.poses.size());
+  CHECK(yelan::run::evaluate_stream(d / "w.h5", scenes, o).poses.empty());  // kept only when asked
+  int moved = 0;
+  for (std::size_t i = 0; i < smoothed.poses.size(); ++i) {
+    const auto& ps = smoothed.poses[i].pose;
+    const auto& pu = unsmoothed.poses[i].pose;
+    REQUIRE(ps.t_us == pu.t_us);
+    CHECK(smoothed.poses[i].source == "ben-dance3-front-high-static");
+    CHECK(smoothed.poses[i].truth[0][2] > 1000);
+    for (int j = 0; j < 13; ++j)
+      for (int c = 0; c < 3; ++c)
+        CHECK(ps.joints_mm[j][c] == Approx(pu.joints_mm[j][c] * ps.head_depth_mm / pu.head_depth_mm).epsilon(1e-4).margin(1e-3));
+    moved += std::abs(ps.head_depth_mm / pu.head_depth_mm - 1) > 1e-3;
+    if (i == 0) continue;
+    const auto& prev = smoothed.poses[i - 1].pose;
+    const double w = 1 - std::exp(-double(ps.t_us - prev.t_us) / 1e5);
+    CHECK(std::log(ps.head_depth_mm) ==
+          Approx(std::log(prev.head_depth_mm) + w * (std::log(pu.head_depth_mm) - std::log(prev.head_depth_mm))).epsilon(1e-9));
+  }
+  CHECK(moved > int(smoothed.poses.size()) / 2);
+  // The paper protocol rescales every pose to the true head depth: smoothing leaves it be.
+  CHECK(smoothed.paper.mpjpe_mm == Approx(unsmoothed.paper.mpjpe_mm).epsilon(1e-4));
+  o.presence_ab = std::array<double, 2>{0, -30};  // nobody on every tick: every depth its own
+  const auto nobody = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
+  REQUIRE(nobody.poses.size() == unsmoothed.poses.size());
+  for (std::size_t i = 0; i < nobody.poses.size(); ++i) {
+    CHECK_FALSE(nobody.poses[i].pose.person);
+    CHECK(nobody.poses[i].pose.head_depth_mm == Approx(unsmoothed.poses[i].pose.head_depth_mm).epsilon(1e-12));
+  }
+  // The CSV of `eval --run --poses`: a header of 99 columns, one row a pose, no joints for a
+  // pose without a person but its label all the same.
+  const auto rows = csv_rows(yelan::run::scored_poses_csv(nobody.poses));
+  REQUIRE(rows.size() == nobody.poses.size() + 1);
+  CHECK(rows[0].size() == 99);
+  CHECK(rows[0][6] == "head_depth_mm");
+  CHECK(rows[0][8] == "j0_x");
+  CHECK(rows[0][47] == "true_j0_x");
+  CHECK(rows[0][98] == "valid12");
+  CHECK(rows[1][0] == "ben-dance3-front-high-static");
+  CHECK(rows[1][3] == "0");
+  CHECK(rows[1][8].empty());
+  CHECK(std::stod(rows[1][7]) == Approx(nobody.poses[0].truth[0][2]).epsilon(1e-6));
+  CHECK(std::stod(rows[1][49]) == Approx(nobody.poses[0].truth[0][2]).epsilon(1e-6));
+  // --poses is the deployed path's: refused without --run, before any work.
+  const auto refused = run_cli({"eval", "--weights", d / "w.h5", "--sim", "test", "--poses", d / "p.csv"});
+  CHECK(refused.code == 2);
+  CHECK(contains(refused.err, "--poses is for eval --run"));
+  CHECK(run_cli({"run", "--weights", d / "w.h5", "x.aedat4", "--depth-tau", "-1"}).code == 2);
 }

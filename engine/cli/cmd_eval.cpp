@@ -41,19 +41,22 @@ std::string presence_json(const std::map<std::string, run::PresenceReport::Condi
 int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
+  if (a.value("--depth-tau")) o.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
+  const bool keep = a.value("--poses").has_value();
   run::StreamEvalResult r;
   std::string what;  // "N recordings" or "N scenes"
   std::size_t count = 0;
   if (!spec.recordings.empty()) {
     // The first --skip s of a recording (the TORE still filling) are not scored, as calibrate does.
-    r = run::evaluate_recordings(spec.weights, spec.recordings, spec.seconds_per_scene, a.number_or("--skip", 0.5, 0, 3600), o, err);
+    r = run::evaluate_recordings(spec.weights, spec.recordings, spec.seconds_per_scene, a.number_or("--skip", 0.5, 0, 3600), o, err,
+                                 keep);
     count = spec.recordings.size();
     what = std::to_string(count) + " recordings";
   } else {
     std::vector<camera::sim::SimSpec> scenes = spec.scenes;
     for (std::size_t i = 0; i < scenes.size(); ++i) train::place_in_clip(scenes[i], spec.seed, i, spec.framed);
     const auto sims = run::simulate_scenes(scenes, spec.seed, spec.seconds_per_scene, std::max(0.1, spec.history_s), err);
-    r = run::evaluate_stream(spec.weights, sims, o);
+    r = run::evaluate_stream(spec.weights, sims, o, keep);
     count = scenes.size();
     what = std::to_string(count) + " scenes";
   }
@@ -90,6 +93,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              ", \"head_depth_abs_error_mm\": " + std::to_string(r.depth_abs_error_mm) +
                              ", \"head_depth_ratio_median\": " + std::to_string(r.depth_ratio_median) +
                              ", \"presence_by_condition\": " + presence_json(r.presence_by_condition) + "}\n");
+  if (const auto p = a.value("--poses")) camera::write_file_atomically(*p, run::scored_poses_csv(r.poses));
   return kOk;
 }
 
@@ -97,13 +101,17 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
-                "--low-light-dn"},
+                "--low-light-dn", "--poses", "--depth-tau"},
                {"--true-mask", "--no-floors", "--run", "--unframed"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
   if (simv && data) throw UsageError("give --sim or --data, not both");
   if (const auto j = a.value("--json")) check_output("--json", *j, {*wpath});
+  if (const auto p = a.value("--poses")) {
+    if (!a.flag("--run")) throw UsageError("--poses is for eval --run (the deployed path's poses)");
+    check_output("--poses", *p, {*wpath});
+  }
   train::EvalSpec spec;
   spec.weights = *wpath;
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));

@@ -286,6 +286,8 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   if (beta) opt.beta = beta_v;
   const double tau = tau_given ? tau_v : before.presence_tau_s;
   opt.presence_tau_s = tau;
+  const bool depth_tau_given = a.value("--depth-tau").has_value();
+  if (depth_tau_given) opt.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
   // Stage 1's cut first: presence is fitted on the share of the frame the cut mask covers.
   std::optional<double> cut;
   if (a.flag("--choose-mask-cut")) {
@@ -354,6 +356,11 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
     dj << std::setprecision(9) << scale;
     wt.config_json = with_run_setting(wt.config_json, "depth_scale", dj.str());
   }
+  if (depth_tau_given) {
+    std::ostringstream tj;
+    tj << std::setprecision(9) << *opt.depth_tau_s;
+    wt.config_json = with_run_setting(wt.config_json, "depth_tau_s", tj.str());
+  }
   std::optional<double> chosen;
   if (beta) chosen = beta_v;
   if (a.flag("--choose-beta")) {
@@ -381,7 +388,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   }
   weights::save_weights(*o, wt);
   out << "wrote " << *o << " (config run.presence" << (depths.empty() ? "" : ", run.depth_scale")
-      << (chosen ? ", run.beta" : "") << (cut ? ", run.mask_cut" : "") << ")\n";
+      << (chosen ? ", run.beta" : "") << (cut ? ", run.mask_cut" : "") << (depth_tau_given ? ", run.depth_tau_s" : "") << ")\n";
   return kOk;
 }
 
@@ -398,7 +405,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "init") return weights_init(rest, out);
     if (sub == "calibrate")
       return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta", "--beta-tolerance", "--ticks",
-                                                          "--presence-tau"},
+                                                          "--presence-tau", "--depth-tau"},
                             {"--choose-beta", "--choose-mask-cut"}),
                        out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);

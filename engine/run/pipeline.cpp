@@ -131,6 +131,7 @@ struct PosePipeline::Impl {
   std::vector<Cues> slot_cues;
   std::vector<Cues> cues;
   PresenceSmoother smoother;
+  DepthSmoother depth_smoother;
   double beta = 0.99;
   Pose last;
   bool have_last = false;
@@ -162,6 +163,8 @@ struct PosePipeline::Impl {
     if (o.mask_cut) nets.cfg.mask_cut = *o.mask_cut;
     if (o.presence_tau_s) nets.cfg.presence_tau_s = *o.presence_tau_s;
     smoother = PresenceSmoother(nets.cfg.presence_tau_s);
+    if (o.depth_tau_s) nets.cfg.depth_tau_s = *o.depth_tau_s;
+    depth_smoother = DepthSmoother(nets.cfg.depth_tau_s);
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
   }
@@ -190,13 +193,17 @@ struct PosePipeline::Impl {
         const float* q = &jn[(std::size_t(f) * cfg.joints + j) * 3];
         unit[std::size_t(j)] = train::denormalise_joint({q[0], q[1], q[2]}, k, 1.0);
       }
-      const double z = opt.fixed_depth_mm > 0 ? opt.fixed_depth_mm
-                                              : nets.cfg.depth_scale * head_depth_from_height(unit, opt.body_height_mm);
       Pose p;
       p.t_us = slot_t[std::size_t(f)];
       p.mask_ran = slot_mask_ran[std::size_t(f)];
-      p.head_depth_mm = z;
       set_presence(p, slot_cues[std::size_t(f)]);
+      double z = opt.fixed_depth_mm;
+      if (!(z > 0)) {
+        z = nets.cfg.depth_scale * head_depth_from_height(unit, opt.body_height_mm);
+        if (p.person) z = depth_smoother.update(z, p.t_us);
+        else depth_smoother.reset();
+      }
+      p.head_depth_mm = z;
       double conf = 0;
       for (int j = 0; j < 13; ++j) {
         for (int c = 0; c < 3; ++c) p.joints_mm[std::size_t(j)][std::size_t(c)] = float(unit[std::size_t(j)][std::size_t(c)] * z);
@@ -373,6 +380,7 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
       m.slot = 0;
       m.have_masks = false;
       m.smoother.start_empty(m.next_tick - m.dt_us);  // one period before the first tick after the gap
+      m.depth_smoother.reset();
     }
     while (e.t > m.next_tick) {
       m.tick(m.next_tick, out);
@@ -418,14 +426,26 @@ void PresenceSmoother::start_empty(std::int64_t t_us) {
   t_ = t_us;
 }
 
+namespace {
+// One step of an exponential average with time constant tau_us; the first tick, no
+// smoothing, or time going backwards (a new recording) starts afresh from x.
+void exp_average(double& avg, bool& have, std::int64_t& t_prev, double x, std::int64_t t_us, double tau_us) {
+  if (!have || tau_us <= 0 || t_us < t_prev) avg = x;
+  else avg += (1 - std::exp(-double(t_us - t_prev) / tau_us)) * (x - avg);
+  have = true;
+  t_prev = t_us;
+}
+}  // namespace
+
 double PresenceSmoother::update(double share, std::int64_t t_us) {
-  const double x = presence_feature(share);
-  // The first tick, no smoothing, or time going backwards (a new recording): start afresh.
-  if (!have_ || tau_us_ <= 0 || t_us < t_) x_ = x;
-  else x_ += (1 - std::exp(-double(t_us - t_) / tau_us_)) * (x - x_);
-  have_ = true;
-  t_ = t_us;
+  exp_average(x_, have_, t_, presence_feature(share), t_us, tau_us_);
   return x_;
+}
+
+double DepthSmoother::update(double depth_mm, std::int64_t t_us) {
+  if (!(depth_mm > 0) || !std::isfinite(depth_mm)) return depth_mm;
+  exp_average(x_, have_, t_, std::log(depth_mm), t_us, tau_us_);
+  return std::exp(x_);
 }
 const std::vector<float>& PosePipeline::last_tore() const { return impl_->vol; }
 const std::vector<float>& PosePipeline::last_mask() const {

@@ -41,6 +41,8 @@ struct RunOptions {
   std::optional<double> mask_cut;
   // P(person)'s smoothing time constant (s) instead of the model's run.presence.tau_s.
   std::optional<double> presence_tau_s;
+  // The head depth's smoothing time constant (s) instead of the model's run.depth_tau_s.
+  std::optional<double> depth_tau_s;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
@@ -154,6 +156,26 @@ class PresenceSmoother {
   // starts or resumes, the first ticks (a TORE of a few milliseconds, the masks a net is
   // least sure of) need about tau_s of evidence to say "person", as someone walking in does.
   void start_empty(std::int64_t t_us);
+
+ private:
+  double tau_us_;
+  bool have_ = false;
+  double x_ = 0;
+  std::int64_t t_ = 0;
+};
+
+// The head depth averaged over time: ln(depth) exponentially with time constant tau_s (0:
+// none). The prior reads each tick's limb lengths, which wander with the pose net's errors
+// from tick to tick, while a dancer's distance changes slowly. It starts afresh on its
+// first tick, when time goes backwards, and after reset() (nobody there: whoever comes next
+// stands somewhere else).
+class DepthSmoother {
+ public:
+  explicit DepthSmoother(double tau_s = 0) : tau_us_(tau_s * 1e6) {}
+  // The smoothed depth at t_us; an estimate that is not a depth (<= 0, NaN) is passed
+  // through and leaves the average alone.
+  double update(double depth_mm, std::int64_t t_us);
+  void reset() { have_ = false; }
 
  private:
   double tau_us_;

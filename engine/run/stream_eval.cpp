@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iomanip>
+#include <sstream>
 #include <cmath>
 #include <numeric>
 
@@ -51,10 +53,27 @@ struct StreamScorer {
   double depth_abs = 0;
   double tick_ms = 0, tore_ms = 0, s1_ms = 0, s2_ms = 0;
   RunStats crops;  // the crop tallies of every run, for run::crop_share
+  bool keep = false;
+  std::string source;  // the name the kept poses carry
+
+  void keep_pose(const Pose& p, bool dancer, const camera::sim::Joints13* label, const std::uint8_t* label_valid) {
+    if (!keep) return;
+    ScoredPose s;
+    s.source = source;
+    s.dancer = dancer;
+    s.pose = p;
+    if (label)
+      for (int j = 0; j < 13; ++j) {
+        s.truth[std::size_t(j)] = {(*label)[std::size_t(j)].x(), (*label)[std::size_t(j)].y(), (*label)[std::size_t(j)].z()};
+        s.valid[std::size_t(j)] = label_valid[j];
+      }
+    r.poses.push_back(std::move(s));
+  }
 
   // A pose of a recording with a dancer, against the label at its time.
   void add(const Pose& p, const camera::sim::Joints13& label, const std::array<std::uint8_t, camera::sim::kJointCount>& label_valid) {
     const bool dancer_seen = std::any_of(label_valid.begin(), label_valid.end(), [](auto v) { return bool(v); });
+    keep_pose(p, true, &label, label_valid.data());
     if (!p.person) {
       r.person_missed += dancer_seen;
       return;  // no joints: scored as a miss, not as NaN
@@ -115,11 +134,14 @@ struct StreamScorer {
 
 }  // namespace
 
-StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes, const RunOptions& run) {
+StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes, const RunOptions& run,
+                                 bool keep_poses) {
   namespace sim = camera::sim;
   using Clock = std::chrono::steady_clock;
   StreamScorer sc;
+  sc.keep = keep_poses;
   for (const SimulatedScene& scene : scenes) {
+    sc.source = scene.sim->spec().name;
     const sim::Simulator& simulator = *scene.sim;
     const double end_s = simulator.duration_s();
     PosePipeline pipe(weights, simulator.camera().width, simulator.camera().height, run);
@@ -141,13 +163,15 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
 }
 
 StreamEvalResult evaluate_recordings(const std::string& weights, const std::vector<std::string>& recordings, double seconds,
-                                     double skip_s, const RunOptions& run, std::ostream& progress) {
+                                     double skip_s, const RunOptions& run, std::ostream& progress, bool keep_poses) {
   namespace sim = camera::sim;
   StreamScorer sc;
+  sc.keep = keep_poses;
   RunOptions opt = run;
   opt.tick_origin_us = 0;
   for (std::size_t i = 0; i < recordings.size(); ++i) {
     const sim::RecordingInfo info = sim::read_recording_info(recordings[i]);
+    sc.source = info.name;
     PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);
     const std::int64_t end_us = info.first_event_us + std::llround(seconds * 1e6);
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
@@ -165,6 +189,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
       if (!info.dancer) {
         ++sc.r.empty_poses;
         sc.r.empty_called_person += p.person;
+        sc.keep_pose(p, false, nullptr, nullptr);
         continue;
       }
       sim::label_at(info, p.t_us, joints, valid);
@@ -175,6 +200,36 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
              << poses.size() << " poses, " << called << " said person\n";
   }
   return sc.result();
+}
+
+std::string scored_poses_csv(const std::vector<ScoredPose>& poses) {
+  std::ostringstream o;
+  o << "source,t_us,dancer,person,confidence,mask_ran,head_depth_mm,true_head_depth_mm";
+  for (const char* what : {"", "true_"})
+    for (int j = 0; j < 13; ++j)
+      for (const char* c : {"x", "y", "z"}) o << ',' << what << 'j' << j << '_' << c;
+  for (int j = 0; j < 13; ++j) o << ",valid" << j;
+  o << '\n';
+  o << std::setprecision(7);
+  for (const ScoredPose& s : poses) {
+    const Pose& p = s.pose;
+    o << s.source << ',' << p.t_us << ',' << int(s.dancer) << ',' << int(p.person) << ',' << p.confidence << ','
+      << int(p.mask_ran) << ',' << p.head_depth_mm << ',';
+    if (s.dancer) o << s.truth[0][2];
+    for (const auto& jt : p.joints_mm)
+      for (float v : jt) {
+        o << ',';
+        if (p.person) o << v;
+      }
+    for (const auto& jt : s.truth)
+      for (double v : jt) {
+        o << ',';
+        if (s.dancer) o << v;
+      }
+    for (std::uint8_t v : s.valid) o << ',' << int(v);
+    o << '\n';
+  }
+  return o.str();
 }
 
 }  // namespace yelan::run

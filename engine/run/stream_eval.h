@@ -4,6 +4,7 @@
 // (the prediction rescaled to the true head depth) and as deployed (the body-height prior).
 // Also what the run cost: the share of ticks that ran stage 1 and the time per tick by stage.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <ostream>
@@ -29,6 +30,19 @@ struct SimulatedScene {
 std::vector<SimulatedScene> simulate_scenes(const std::vector<camera::sim::SimSpec>& scenes, std::uint64_t seed,
                                             double seconds, double warmup_s, std::ostream& progress);
 
+// One pose of an evaluation with what it was scored against (`yelan eval --run --poses`).
+struct ScoredPose {
+  std::string source;  // the recording's or scene's name
+  bool dancer = true;  // false: a recording with nobody in it (no label)
+  Pose pose;
+  std::array<std::array<double, 3>, 13> truth{};  // mm, camera frame
+  std::array<std::uint8_t, 13> valid{};           // 0: the joint is not in the picture
+};
+
+// The CSV of `eval --run --poses`: one row per pose, its verdict, head depths, joints as run
+// (empty when no person) and the label (empty without a dancer).
+std::string scored_poses_csv(const std::vector<ScoredPose>& poses);
+
 struct StreamEvalResult {
   train::PoseScores paper;         // head depth from the label (the paper's protocol)
   train::PoseScores deployed;      // head depth from the pipeline's estimate
@@ -48,15 +62,17 @@ struct StreamEvalResult {
   // Every pose's verdict under the conditions its recording's name says (evaluate_recordings):
   // dancer recordings count all their poses in the span, the dancer in the picture or not.
   std::map<std::string, PresenceReport::Condition> presence_by_condition;
+  std::vector<ScoredPose> poses;  // every pose in the scored spans, when asked for (keep_poses)
 };
 
 StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,
-                                 const RunOptions& run);
+                                 const RunOptions& run, bool keep_poses = false);
 
 // The same on labelled recordings on disk (*.yelan.h5, dancer and empty scenes): each run
 // through the pipeline from its first event, ticks on the recording's label clock, the
 // poses from skip_s to `seconds` scored (on empty scenes: counted, and those saying person).
 StreamEvalResult evaluate_recordings(const std::string& weights, const std::vector<std::string>& recordings, double seconds,
-                                     double skip_s, const RunOptions& run, std::ostream& progress);
+                                     double skip_s, const RunOptions& run, std::ostream& progress,
+                                     bool keep_poses = false);
 
 }  // namespace yelan::run
