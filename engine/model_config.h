@@ -44,6 +44,8 @@ struct ModelConfig {
   //   run.depth_scale: the body-height prior's head depth is multiplied by it (fitted by
   //   `yelan calibrate`: a net's skeletons are shorter than the bodies it saw, soft-argmax
   //   pulls joints toward the middle, so the prior alone puts the dancer too far away).
+  //   run.depth_forearms (optional, default true): whether the prior counts the forearms
+  //   (run::head_depth_from_height; a model's depth_scale is fitted under its choice).
   //   run.depth_tau_s (optional, default 0): the head depth's logarithm is averaged over
   //   the ticks with a person, exponentially with this time constant (run::DepthSmoother).
   //   run.mask_cut: stage 1's masks are the pixels whose sigmoid exceeds it (default 0.1, a
@@ -53,6 +55,7 @@ struct ModelConfig {
   double mask_cut = 0.1;
   double depth_scale = 1;
   double depth_tau_s = 0;
+  bool depth_forearms = true;
   double presence_a = 3.0, presence_b = 13.8;
   double presence_tau_s = 0;
   bool presence_calibrated = false;

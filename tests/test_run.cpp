@@ -416,6 +416,13 @@ TEST_CASE("run: the depth prior scales a unit-depth skeleton to the body height"
   for (int c = 0; c < 4; ++c)
     for (int k = 0; k < 3; ++k) unit[std::size_t(chain[c][k])] = {double(c), 0.1 * k, 1};
   CHECK(yelan::run::head_depth_from_height(unit, 1700) == Approx(2 * 0.823 * 1700 / 0.8));
+  // Without the forearms: 6 bones of 0.1 against 2 x (0.186 + 0.245 + 0.246) x 1700, and a
+  // hand anywhere leaves it be.
+  CHECK(yelan::run::head_depth_from_height(unit, 1700, false) == Approx(2 * 0.677 * 1700 / 0.6));
+  unit[7] = {5, 5, 2};
+  unit[8] = {-3, 1, 1};
+  CHECK(yelan::run::head_depth_from_height(unit, 1700, false) == Approx(2 * 0.677 * 1700 / 0.6));
+  CHECK(yelan::run::head_depth_from_height(unit, 1700) != Approx(2 * 0.823 * 1700 / 0.8));
 }
 
 #include <random>
@@ -775,6 +782,22 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(m.out.find("chosen: run.mask_cut") < m.out.find("fitted: a "));
   CHECK(contains(m.out, ", run.mask_cut)"));
   CHECK(contains(run_cli({"weights", "inspect", d / "m.h5"}).out, "\"mask_cut\""));
+  // The deployed depth's settings: the scale is fitted under them and they are stored; the
+  // median depth ratio is 1 again under the new prior (the limb sum without the forearms).
+  const auto dp = run_cli({"weights", "calibrate", "--weights", d / "c.h5", "--data", d / "ds", "-o", d / "dp.h5", "--seconds", "0.3",
+                           "--skip", "0.1", "--depth-tau", "0.3", "--depth-without-forearms"});
+  INFO(dp.err);
+  REQUIRE(dp.code == 0);
+  CHECK(contains(dp.out, ", run.depth_tau_s, run.depth_forearms)"));
+  const auto dpi = run_cli({"weights", "inspect", d / "dp.h5"}).out;
+  CHECK(contains(dpi, "\"depth_tau_s\":0.3"));
+  CHECK(contains(dpi, "\"depth_forearms\":false"));
+  CHECK(contains(dpi, "\"tau_s\":0.1"));  // the model's presence smoothing kept
+  const auto dev = run_cli({"eval", "--run", "--weights", d / "dp.h5", "--data", d / "ds/val", "--seconds", "0.4", "--skip", "0.1",
+                            "--json", d / "dev.json"});
+  REQUIRE(dev.code == 0);
+  CHECK(nlohmann::json::parse(slurp(d / "dev.json")).at("head_depth_ratio_median").get<double>() == Approx(1).margin(0.1));
+  CHECK(run_cli({"weights", "calibrate", "--weights", d / "c.h5", "--data", d / "ds", "-o", d / "x.h5", "--depth-tau", "-2"}).code == 2);
 }
 
 #include "camera/io/event_reader.h"

@@ -288,6 +288,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   opt.presence_tau_s = tau;
   const bool depth_tau_given = a.value("--depth-tau").has_value();
   if (depth_tau_given) opt.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
+  if (a.flag("--depth-without-forearms")) opt.depth_forearms = false;
   // Stage 1's cut first: presence is fitted on the share of the frame the cut mask covers.
   std::optional<double> cut;
   if (a.flag("--choose-mask-cut")) {
@@ -356,6 +357,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
     dj << std::setprecision(9) << scale;
     wt.config_json = with_run_setting(wt.config_json, "depth_scale", dj.str());
   }
+  if (opt.depth_forearms) wt.config_json = with_run_setting(wt.config_json, "depth_forearms", "false");
   if (depth_tau_given) {
     std::ostringstream tj;
     tj << std::setprecision(9) << *opt.depth_tau_s;
@@ -388,7 +390,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   }
   weights::save_weights(*o, wt);
   out << "wrote " << *o << " (config run.presence" << (depths.empty() ? "" : ", run.depth_scale")
-      << (chosen ? ", run.beta" : "") << (cut ? ", run.mask_cut" : "") << (depth_tau_given ? ", run.depth_tau_s" : "") << ")\n";
+      << (chosen ? ", run.beta" : "") << (cut ? ", run.mask_cut" : "") << (depth_tau_given ? ", run.depth_tau_s" : "") << (opt.depth_forearms ? ", run.depth_forearms" : "") << ")\n";
   return kOk;
 }
 
@@ -406,7 +408,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     if (sub == "calibrate")
       return calibrate(Args("weights calibrate", rest, {"--weights", "--data", "-o", "--seconds", "--skip", "--rate", "--beta", "--beta-tolerance", "--ticks",
                                                           "--presence-tau", "--depth-tau"},
-                            {"--choose-beta", "--choose-mask-cut"}),
+                            {"--choose-beta", "--choose-mask-cut", "--depth-without-forearms"}),
                        out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
   } catch (const weights::WeightsError& e) {

@@ -84,14 +84,15 @@ float largest_blob_share(const std::vector<float>& mask, int w, int h) {
   return total ? float(best) / float(total) : 0.f;
 }
 
-double head_depth_from_height(const std::array<std::array<double, 3>, 13>& unit, double height_mm) {
+double head_depth_from_height(const std::array<std::array<double, 3>, 13>& unit, double height_mm, bool forearms) {
   // The limbs' lengths for this height, as the simulator's bodies have them (Drillis-Contini).
   camera::sim::BodyShape shape;
   shape.height_mm = height_mm;
   const camera::sim::BodyProportions b = camera::sim::body_proportions(shape);
-  const double prior = 2 * (b.upper_arm + b.forearm + b.thigh + b.shank);
+  const double prior = 2 * (b.upper_arm + (forearms ? b.forearm : 0) + b.thigh + b.shank);
   double sum = 0;
   for (const auto& bone : kBones) {
+    if (!forearms && (bone[1] == 7 || bone[1] == 8)) continue;  // elbow-hand
     const auto& p = unit[std::size_t(bone[0])];
     const auto& q = unit[std::size_t(bone[1])];
     sum += std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
@@ -165,6 +166,7 @@ struct PosePipeline::Impl {
     smoother = PresenceSmoother(nets.cfg.presence_tau_s);
     if (o.depth_tau_s) nets.cfg.depth_tau_s = *o.depth_tau_s;
     depth_smoother = DepthSmoother(nets.cfg.depth_tau_s);
+    if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
   }
@@ -199,7 +201,7 @@ struct PosePipeline::Impl {
       set_presence(p, slot_cues[std::size_t(f)]);
       double z = opt.fixed_depth_mm;
       if (!(z > 0)) {
-        z = nets.cfg.depth_scale * head_depth_from_height(unit, opt.body_height_mm);
+        z = nets.cfg.depth_scale * head_depth_from_height(unit, opt.body_height_mm, nets.cfg.depth_forearms);
         if (p.person) z = depth_smoother.update(z, p.t_us);
         else depth_smoother.reset();
       }

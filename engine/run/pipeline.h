@@ -43,6 +43,8 @@ struct RunOptions {
   std::optional<double> presence_tau_s;
   // The head depth's smoothing time constant (s) instead of the model's run.depth_tau_s.
   std::optional<double> depth_tau_s;
+  // Whether the depth prior counts the forearms, instead of the model's run.depth_forearms.
+  std::optional<bool> depth_forearms;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
@@ -125,7 +127,10 @@ double run_file(PosePipeline& pipe, const std::string& path, std::int64_t end_us
 
 // The depth prior: head depth at which the predicted skeleton's limb lengths (upper arms,
 // forearms, thighs, shanks) sum to a body of the given height (Drillis-Contini fractions).
-double head_depth_from_height(const std::array<std::array<double, 3>, 13>& joints_at_unit_depth, double height_mm);
+// forearms false leaves the forearms out: they end at the hands, the joints a net places
+// worst, and their lengths wander the most from tick to tick.
+double head_depth_from_height(const std::array<std::array<double, 3>, 13>& joints_at_unit_depth, double height_mm,
+                              bool forearms = true);
 
 // The q-quantile (0..1) of per-tick times, nearest rank; 0 for none.
 double percentile(std::vector<double> v, double q);
