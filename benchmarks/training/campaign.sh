@@ -279,7 +279,7 @@ case "$what" in
   # camera in high light, a kind ds-s5 holds a handful of. From the control mask-s7, 32
   # one-frame windows a step, lr 2e-4 cosine; alone on the machine: THREADS=2.
   train-mask-s8)
-    DATA=$DATA_S6 BATCH=32 train mask mask-s8 "${MASK_S8_STEPS:-700}" --lr 2e-4 --mask-frames 1 \
+    DATA=$DATA_S6 BATCH=32 train mask mask-s8 "${MASK_S8_STEPS:-500}" --lr 2e-4 --mask-frames 1 \
       --init "${MASK_S8_INIT:-$RUNS/mask-s7/final.h5}" ;;
   # Can the shipped pose net fit 16 recordings? Every 12th dancer recording of ds-s3's
   # training split (16), trained and validated on the same 16 from the shipped net, lr 1e-3
