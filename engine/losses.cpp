@@ -114,7 +114,7 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const floa
 }
 
 MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std::vector<float>& dscores,
-                   const std::vector<float>& sample_weights) {
+                   const std::vector<float>& sample_weights, double dice_weight) {
   const Act& m = net.masks();
   const int n = m.n, N = m.c;
   const std::size_t P = m.pixels();
@@ -125,6 +125,7 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
   double total_w = 0;
   for (int i = 0; i < n; ++i) total_w += weight(i);
   if (!(total_w > 0)) throw std::invalid_argument("mask loss: the sample weights sum to " + std::to_string(total_w));
+  if (!(dice_weight >= 0)) throw std::invalid_argument("mask loss: the Dice weight must be >= 0");
   MaskLoss out;
   std::memset(dmasks.data, 0, dmasks.floats() * sizeof(float));
   const double n_first = total_w * P, n_all = total_w * N * P;
@@ -159,7 +160,25 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
     out.score_mse += wi * d * d / n_scores;
     dscores[k] = float(2.0 * wi * d / n_scores);
   }
-  out.total = out.bce_first + out.bce_all + out.score_mse;
+  for (int i = 0; i < n; ++i) {
+    const std::size_t off = std::size_t(i) * m.cb() * P * 16;  // channel 0
+    double inter = 0, sum_p = 0, sum_y = 0;
+    for (std::size_t p = 0; p < P; ++p) {
+      const double s = 1.0 / (1.0 + std::exp(-double(m.data[off + p * 16]))), y = labels.data[off + p * 16];
+      inter += s * y;
+      sum_p += s;
+      sum_y += y;
+    }
+    const double num = 2 * inter + 1, den = sum_p + sum_y + 1, share = weight(i) / total_w;
+    out.dice += share * (1 - num / den);
+    if (dice_weight == 0) continue;
+    for (std::size_t p = 0; p < P; ++p) {
+      const double s = 1.0 / (1.0 + std::exp(-double(m.data[off + p * 16]))), y = labels.data[off + p * 16];
+      const double d_s = -(2 * y * den - num) / (den * den);
+      dmasks.data[off + p * 16] += float(dice_weight * share * d_s * s * (1 - s));
+    }
+  }
+  out.total = out.bce_first + out.bce_all + out.score_mse + dice_weight * out.dice;
   return out;
 }
 

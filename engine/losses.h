@@ -32,14 +32,21 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const floa
 
 struct MaskLoss {
   double total = 0, bce_first = 0, bce_all = 0, score_mse = 0;
+  // Soft Dice loss of the current mask, 1 - (2 sum(p y) + 1) / (sum p + sum y + 1) per sample
+  // (p the sigmoid; +1: a pixel's worth, so an empty label and an empty mask score 0),
+  // weighted mean over the samples; always reported, in total only times dice_weight.
+  double dice = 0;
 };
 
 // labels: the same blocked layout and shape as net.masks(). dmasks gets dL/dlogits;
 // dscores (n x N) dL/dscores. sample_weights (n, or empty for 1 each): every term is a
 // weighted mean over the samples, sum w_i x_i / sum w_i, so the loss stays on the scale of
-// the unweighted one while some samples pull harder than others.
+// the unweighted one while some samples pull harder than others. dice_weight > 0 adds the
+// Dice term: the dancer covers a few percent of the frame, so per-pixel BCE is mostly the
+// background's, while Dice scores the overlap that the mask IoU measures.
 MaskLoss mask_loss(const MaskNet& net, const layers::Act& labels, const layers::Act& dmasks,
-                   std::vector<float>& dscores, const std::vector<float>& sample_weights = {});
+                   std::vector<float>& dscores, const std::vector<float>& sample_weights = {},
+                   double dice_weight = 0);
 
 // One weight per sample: `nobody` where the sample's current-frame label (channel 0) is
 // empty (a scene with nobody in the picture), 1 elsewhere. Stage 1's false alarms are whole

@@ -1,8 +1,10 @@
 // The mask loss's sample weights: a weighted mean of what each sample alone would give, and
-// the windows with nobody in their current frame found from the labels.
+// the windows with nobody in their current frame found from the labels; its Dice term's
+// value on masks whose overlap is known, and its gradient against finite differences.
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <random>
 
 #include "engine/losses.h"
 #include "engine/model_config.h"
@@ -91,5 +93,97 @@ TEST_CASE("mask loss: sample weights give the weighted mean of each sample's own
     CHECK(w[0] == 4.f);
     CHECK(w[1] == 1.f);
     CHECK(w[2] == 1.f);
+  }
+}
+
+TEST_CASE("mask loss: the Dice term scores the current mask's overlap, its gradient by finite differences",
+          "[train][losses]") {
+  const ModelConfig cfg = load_model_config("tiny");
+  MaskNet net(cfg);
+  net.init(5);
+  net.set_training(false);
+  test::Owned x(3, cfg.channels, cfg.height(), cfg.width(), 8);
+  net.forward(x.act);
+  const layers::Act& m = net.masks();
+  const std::size_t per = m.floats() / 3, P = m.pixels();
+  test::Owned labels(m);
+  // Sample 0: nobody in any frame; 1: a blob now; 2: a blob in a later frame only.
+  labels.for_each_real([&](std::size_t k) {
+    const std::size_t i = k / per, c = k % 16, p = (k % per) / 16;
+    const bool blob = (p % 31) < 9;
+    labels.mem[k] = blob && ((i == 1 && c == 0) || (i == 2 && c == 2)) ? 1.f : 0.f;
+  });
+  test::Owned dm(m);
+  std::vector<float> ds;
+  auto set_logits = [&](auto&& f) {
+    for (std::size_t k = 0; k < m.floats(); ++k)
+      if (int(k % 16) < m.c) m.data[k] = f(k);
+  };
+
+  SECTION("a mask equal to the label scores 0, its complement nearly 1, nobody and no mask 0") {
+    set_logits([&](std::size_t k) { return labels.mem[k] > 0.5f ? 40.f : -40.f; });
+    CHECK(mask_loss(net, labels.act, dm.act, ds).dice == Approx(0).margin(1e-9));
+    set_logits([&](std::size_t k) { return labels.mem[k] > 0.5f ? -40.f : 40.f; });
+    // Each sample: 1 - 1 / (P + 1) (no overlap, the mask and the label cover the frame), or,
+    // for sample 0 and 2 (nobody now, the mask everywhere), 1 - 1 / (P + 1) as well.
+    CHECK(mask_loss(net, labels.act, dm.act, ds).dice == Approx(1 - 1.0 / (double(P) + 1)).epsilon(1e-9));
+    // Half the blob found, nothing else: 1 - (2 B/2 + 1) / (B/2 + B + 1) for sample 1 alone.
+    double blob = 0;
+    for (std::size_t p = 0; p < P; ++p) blob += labels.mem[per + p * 16];
+    std::size_t found = 0;
+    set_logits([&](std::size_t k) {
+      if (labels.mem[k] < 0.5f) return -40.f;
+      return k / per == 1 && k % 16 == 0 && found++ % 2 == 0 ? 40.f : -40.f;
+    });
+    const double half = std::ceil(blob / 2), want = (1 - (2 * half + 1) / (half + blob + 1)) / 3;
+    CHECK(mask_loss(net, labels.act, dm.act, ds).dice == Approx(want).epsilon(1e-9));
+  }
+  SECTION("weight 0 reports the term and leaves the loss and its gradient alone") {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-3.f, 3.f);
+    set_logits([&](std::size_t) { return u(rng); });
+    const MaskLoss plain = mask_loss(net, labels.act, dm.act, ds);
+    const std::vector<float> g0(dm.act.data, dm.act.data + dm.act.floats());
+    CHECK(plain.dice > 0.1);
+    CHECK(plain.total == Approx(plain.bce_first + plain.bce_all + plain.score_mse).epsilon(1e-12));
+    const MaskLoss with = mask_loss(net, labels.act, dm.act, ds, {}, 2.0);
+    CHECK(with.total == Approx(plain.total + 2.0 * plain.dice).epsilon(1e-12));
+    std::size_t moved_now = 0, moved_later = 0;
+    for (std::size_t k = 0; k < g0.size(); ++k)
+      if (dm.act.data[k] != g0[k]) ++(k % 16 == 0 ? moved_now : moved_later);
+    CHECK(moved_now > P);  // the current mask's logits of every sample
+    CHECK(moved_later == 0);
+    CHECK_THROWS_AS(mask_loss(net, labels.act, dm.act, ds, {}, -1.0), std::invalid_argument);
+  }
+  SECTION("the gradient of the loss with Dice, weighted samples, against central differences") {
+    // The scores' targets (1 - mean |mask error|) are held fixed in the gradient, as a
+    // target is: the finite differences leave the score term out.
+    auto loss_of = [&] {
+      const MaskLoss l = mask_loss(net, labels.act, dm.act, ds, {0.5f, 2.f, 1.f}, 3.0);
+      return l.total - l.score_mse;
+    };
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<float> u(-3.f, 3.f);
+    set_logits([&](std::size_t) { return u(rng); });
+    const std::vector<float> w{0.5f, 2.f, 1.f};
+    mask_loss(net, labels.act, dm.act, ds, w, 3.0);
+    const std::vector<float> g(dm.act.data, dm.act.data + dm.act.floats());
+    double worst = 0, scale = 0;
+    for (std::size_t k = 0; k < g.size(); k += 7) {
+      if (int(k % 16) >= m.c) continue;
+      const float x0 = m.data[k];
+      m.data[k] = x0 + 0.01f;
+      const float xp = m.data[k];
+      const double lp = loss_of();
+      m.data[k] = x0 - 0.01f;
+      const float xm = m.data[k];
+      const double lm = loss_of();
+      m.data[k] = x0;
+      const double fd = (lp - lm) / double(xp - xm);
+      worst = std::max(worst, std::abs(fd - double(g[k])));
+      scale = std::max(scale, std::abs(double(g[k])));
+    }
+    REQUIRE(scale > 0);
+    CHECK(worst < 1e-4 * scale);
   }
 }

@@ -291,6 +291,42 @@ TEST_CASE("train: --mask-frames sets the mask stage's training windows, validati
   CHECK(zero.code == 2);
 }
 
+TEST_CASE("train: --dice-weight changes the mask stage's training loss, not its validation loss's formula", "[train][cli]") {
+  yelan::test::CliTempDir d("train-dice");
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> v = {"train", "--stage", "mask", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                  "--epoch-steps", "1", "--val-windows", "1", "--batch", "2", "--threads", "1",
+                                  "-o", d / out, "--steps", "1"};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  auto row = [&](const std::string& out) {  // the first step's loss and validation loss
+    std::istringstream in(yelan::test::slurp(d / (out + "/log.csv")));
+    std::string line;
+    std::getline(in, line);
+    std::getline(in, line);
+    std::vector<std::string> c;
+    std::istringstream l(line);
+    for (std::string x; std::getline(l, x, ',');) c.push_back(x);
+    REQUIRE(c.size() == 11);
+    return std::make_pair(std::stod(c[2]), std::stod(c[3]));
+  };
+  const auto plain = run("plain", {}), dice = run("dice", {"--dice-weight", "2"});
+  INFO(dice.err);
+  REQUIRE(plain.code == 0);
+  REQUIRE(dice.code == 0);
+  // One step from the same start on the same window: the training loss gains 2 x Dice (> 0
+  // for a net that has not learned), the validation loss is scored after the step, without it.
+  CHECK(row("dice").first > row("plain").first + 0.5);
+  CHECK(row("dice").second < row("plain").first + 0.5);
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "dice/run.json"), "\"dice_weight\": 2"));
+  const auto pose = yelan::test::run_cli({"train", "--stage", "pose", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                          "-o", d / "p", "--steps", "1", "--dice-weight", "1"});
+  CHECK(pose.code == 2);
+  CHECK(yelan::test::contains(pose.err, "--dice-weight"));
+  CHECK(run("neg", {"--dice-weight", "-1"}).code == 2);
+}
+
 TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bit-exactly, and eval --data scores them", "[train][cli]") {
   yelan::test::CliTempDir d("train-data");
   std::filesystem::create_directories(d / "rec");

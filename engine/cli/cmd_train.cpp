@@ -52,7 +52,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   const Args a("train", argv,
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
-                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight"},
+                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight"},
                {"--occlusion", "--warp", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
@@ -131,6 +131,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   if (spec.warp && spec.stage != "pose") throw UsageError("--warp: for --stage pose only");
   spec.empty_weight = float(a.number_or("--empty-weight", 1, 0, 1e3, true));
   if (spec.empty_weight != 1 && spec.stage != "mask") throw UsageError("--empty-weight: for --stage mask only");
+  spec.dice_weight = float(a.number_or("--dice-weight", 0, 0, 100));
+  if (spec.dice_weight != 0 && spec.stage != "mask") throw UsageError("--dice-weight: for --stage mask only");
   spec.mask_weights = a.value_or("--mask-weights", "");
   spec.init_weights = a.value_or("--init", "");
   spec.checkpoint_minutes = a.number_or("--checkpoint-minutes", 10, 0, 1e6, true);

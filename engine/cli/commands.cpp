@@ -81,7 +81,7 @@ const std::vector<Command>& commands() {
        "       yelan train --stage mask|pose --config NAME|FILE --data DIR [--val-data DIR] -o OUTDIR\n"
        "                   [--steps 1000] [--batch 8] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
        "                   [--lr-schedule cosine|step] [--warmup-steps N] [--history 5] [--val-windows N]\n"
-       "                   [--stop-at STEP] [--mask-frames F] [--empty-weight W]\n"
+       "                   [--stop-at STEP] [--mask-frames F] [--empty-weight W] [--dice-weight D]\n"
        "                   [--occlusion] [--warp] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
        "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
        "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
@@ -105,7 +105,10 @@ const std::vector<Command>& commands() {
        "similarity (scale 0.8-1.25, rotation +-15 deg, shift +-10% of the frame), as a camera\n"
        "rolled and panned and the dancer nearer or farther; validation is never warped.\n"
        "--empty-weight W (mask stage): a window whose current frame shows nobody counts W times\n"
-       "a dancer's in the loss (a weighted mean over the batch); validation is never weighted.\n",
+       "a dancer's in the loss (a weighted mean over the batch); validation is never weighted.\n"
+       "--dice-weight D (mask stage): adds D times the soft Dice loss of the current mask (the\n"
+       "overlap the mask IoU scores; per-pixel BCE is mostly the background's); the validation\n"
+       "loss leaves it out, so it compares across runs.\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"

@@ -222,6 +222,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.warp && !pose_stage) throw std::invalid_argument("the geometric augmentation (warp) is for the pose stage");
   if (spec.empty_weight != 1 && pose_stage) throw std::invalid_argument("the empty-scene weight is for the mask stage");
   if (!(spec.empty_weight > 0)) throw std::invalid_argument("the empty-scene weight must be > 0");
+  if (spec.dice_weight != 0 && pose_stage) throw std::invalid_argument("the Dice weight is for the mask stage");
+  if (!(spec.dice_weight >= 0)) throw std::invalid_argument("the Dice weight must be >= 0");
   if (spec.mask_frames < 0 || (pose_stage && spec.mask_frames > 0))
     throw std::invalid_argument("frames per mask window: the mask stage only, and >= 1");
   // The training windows' shape; validation, weights and the saved config keep cfg's.
@@ -259,7 +261,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"lr", spec.adam.lr},            {"lr_schedule", spec.lr_schedule},
                                       {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
                                       {"occlusion", spec.occlusion},   {"warp", spec.warp},
-                                      {"empty_weight", spec.empty_weight},
+                                      {"empty_weight", spec.empty_weight}, {"dice_weight", spec.dice_weight},
                                       {"seed", spec.seed},
                                       {"mask_weights", spec.mask_weights}, {"init_weights", spec.init_weights},
                                       {"train_recordings", train_files.size()}, {"val_recordings", val_files.size()},
@@ -488,7 +490,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       std::vector<float> dscores;
       const std::vector<float> weights =
           spec.empty_weight == 1 ? std::vector<float>{} : nobody_weights(batch.labels.act, spec.empty_weight);
-      loss = mask_loss(mask, batch.labels.act, dmasks, dscores, weights).total;
+      loss = mask_loss(mask, batch.labels.act, dmasks, dscores, weights, spec.dice_weight).total;
       mask.backward(batch.input.act, dmasks, dscores.data());
     }
     if (!std::isfinite(loss))  // the last checkpoint stays as it was: this step's BN statistics may be NaN

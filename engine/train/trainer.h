@@ -52,6 +52,8 @@ struct TrainSpec {
   bool warp = false;                // pose stage: a random similarity per window (augment.h)
   float empty_weight = 1;           // mask stage: a window showing nobody weighs this much in
                                     // the loss (nobody_weights); validation is never weighted
+  float dice_weight = 0;            // mask stage: the soft Dice term's weight (mask_loss); the
+                                    // validation loss leaves it out, comparable across runs
   std::string mask_weights;         // pose stage: frozen mask net; empty: the true mask
   std::string init_weights;         // start from these instead of a random initialisation
   std::string out_dir;
