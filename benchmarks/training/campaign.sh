@@ -112,7 +112,7 @@ train() {
   local resume=()
   [ -f "$RUNS/$name/checkpoint.state" ] && resume=(--resume)
   "$Y" train --stage "$stage" --config "$CFG" --data "$DATA" -o "$RUNS/$name" --steps "$steps" --batch "${BATCH:-8}" \
-    --epoch-steps 250 --val-windows 48 --patience 1000 --checkpoint-minutes 5 --threads "${THREADS:-1}" --quiet "${resume[@]}" "$@" \
+    --epoch-steps "${EPOCH_STEPS:-250}" --val-windows 48 --patience 1000 --checkpoint-minutes 5 --threads "${THREADS:-1}" --quiet "${resume[@]}" "$@" \
     > "$RUNS/$name.out" 2>&1
 }
 
@@ -281,6 +281,10 @@ case "$what" in
   train-mask-s8)
     DATA=$DATA_S6 BATCH=32 train mask mask-s8 "${MASK_S8_STEPS:-500}" --lr 2e-4 --mask-frames 1 \
       --init "${MASK_S8_INIT:-$RUNS/mask-s7/final.h5}" ;;
+  # mask-s9: mask-s8 on with the soft Dice loss beside the BCE (the IoU's own measure).
+  train-mask-s9)
+    DATA=$DATA_S6 BATCH=32 EPOCH_STEPS=100 train mask mask-s9 "${MASK_S9_STEPS:-400}" --lr 2e-4 --mask-frames 1 \
+      --dice-weight "${MASK_S9_DICE:-1}" --init "${MASK_S9_INIT:-$RUNS/mask-s8/final.h5}" ;;
   # Can the shipped pose net fit 16 recordings? Every 12th dancer recording of ds-s3's
   # training split (16), trained and validated on the same 16 from the shipped net, lr 1e-3
   # cosine. Run 2026-11-27 (MPJPE 90 mm on them at step 250; stopped at 367): it memorises
@@ -297,7 +301,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
