@@ -285,6 +285,12 @@ case "$what" in
   train-mask-s9)
     DATA=$DATA_S6 BATCH=32 EPOCH_STEPS=100 train mask mask-s9 "${MASK_S9_STEPS:-400}" --lr 2e-4 --mask-frames 1 \
       --dice-weight "${MASK_S9_DICE:-1}" --init "${MASK_S9_INIT:-$RUNS/mask-s8/final.h5}" ;;
+  # mask-s10: the shipped stage 1 (mask-s8) on for 1000 more steps on ds-s6 at half the rate
+  # (mask-s8's validation loss still fell over its last 250 steps); BCE alone (mask-s9's Dice
+  # bought nothing).
+  train-mask-s10)
+    DATA=$DATA_S6 BATCH=32 train mask mask-s10 "${MASK_S10_STEPS:-1000}" --lr 1e-4 --mask-frames 1 \
+      --init "${MASK_S10_INIT:-$RUNS/mask-s8/final.h5}" ;;
   # Can the shipped pose net fit 16 recordings? Every 12th dancer recording of ds-s3's
   # training split (16), trained and validated on the same 16 from the shipped net, lr 1e-3
   # cosine. Run 2026-11-27 (MPJPE 90 mm on them at step 250; stopped at 367): it memorises
@@ -301,7 +307,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
