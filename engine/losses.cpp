@@ -1,5 +1,6 @@
 #include "engine/losses.h"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -130,6 +131,8 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
   std::memset(dmasks.data, 0, dmasks.floats() * sizeof(float));
   const double n_first = total_w * P, n_all = total_w * N * P;
   std::vector<double> score_gt(std::size_t(n) * N, 0.0);
+  // The Dice term's sums over the current mask, per sample: sum(p y), sum p, sum y.
+  std::vector<std::array<double, 3>> dice_sums(std::size_t(n), {0.0, 0.0, 0.0});
   for (int i = 0; i < n; ++i) {
     const double wi = weight(i);
     for (int c = 0; c < N; ++c) {
@@ -144,6 +147,10 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
         if (c == 0) {
           out.bce_first += l / n_first;
           g += wi * (s - y) / n_first;
+          auto& d = dice_sums[std::size_t(i)];
+          d[0] += s * y;
+          d[1] += s;
+          d[2] += y;
         }
         dmasks.data[off + p * 16] = float(g);
         abs_sum += std::abs(s - y);
@@ -161,17 +168,11 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
     dscores[k] = float(2.0 * wi * d / n_scores);
   }
   for (int i = 0; i < n; ++i) {
-    const std::size_t off = std::size_t(i) * m.cb() * P * 16;  // channel 0
-    double inter = 0, sum_p = 0, sum_y = 0;
-    for (std::size_t p = 0; p < P; ++p) {
-      const double s = 1.0 / (1.0 + std::exp(-double(m.data[off + p * 16]))), y = labels.data[off + p * 16];
-      inter += s * y;
-      sum_p += s;
-      sum_y += y;
-    }
-    const double num = 2 * inter + 1, den = sum_p + sum_y + 1, share = weight(i) / total_w;
+    const auto& d = dice_sums[std::size_t(i)];
+    const double num = 2 * d[0] + 1, den = d[1] + d[2] + 1, share = weight(i) / total_w;
     out.dice += share * (1 - num / den);
     if (dice_weight == 0) continue;
+    const std::size_t off = std::size_t(i) * m.cb() * P * 16;  // channel 0
     for (std::size_t p = 0; p < P; ++p) {
       const double s = 1.0 / (1.0 + std::exp(-double(m.data[off + p * 16]))), y = labels.data[off + p * 16];
       const double d_s = -(2 * y * den - num) / (den * den);
