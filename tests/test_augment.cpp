@@ -1,5 +1,5 @@
-// The geometric augmentation: a warped picture and its warped joints agree, the identity
-// changes nothing, and the trainer's batch carries both.
+// The geometric augmentation: a warped picture and its warped joints (or masks) agree, the
+// identity changes nothing, and the trainer's batch carries both.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -109,7 +109,55 @@ TEST_CASE("augment: the batch under the identity warp is the plain batch, and un
     }
   }
   CHECK(checked > cfg.window * 8);
-  // The mask stage's labels are not warped: asking is a mistake.
-  BatchBuilder masks(cfg, 1, MaskSource::none);
-  CHECK_THROWS_WITH(masks.add(w, unused, nullptr, &s), Catch::Contains("pose stage"));
+}
+
+TEST_CASE("augment: the mask stage's labels move with its warped input and stay binary", "[train]") {
+  namespace sim = yelan::camera::sim;
+  yelan::ModelConfig cfg = yelan::load_model_config(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-nomask.json");
+  cfg.window = 1;  // as --mask-frames 1 trains: one input frame, n_masks label frames
+  sim::WindowStreamOptions o;
+  o.window = cfg.window + cfg.n_masks - 1;
+  o.warmup_s = 0.1;
+  o.scene_s = o.warmup_s + o.window / o.frame_hz + 1e-6;
+  sim::SimWindowStream stream({sim::preset_spec("ben-dance7-front-high-static")}, 5, o);
+  sim::SimWindow w;
+  stream.next(w);
+  yelan::MaskNet unused(cfg);
+  BatchBuilder plain(cfg, 1, MaskSource::none), same(cfg, 1, MaskSource::none), warped(cfg, 1, MaskSource::none);
+  const Similarity id{}, s{0.85, 0.2, 40, -10};  // shrunk: the whole dancer stays in the frame
+  plain.add(w, unused, nullptr);
+  same.add(w, unused, nullptr, &id);
+  warped.add(w, unused, nullptr, &s);
+  const auto &a = plain.batch().labels.act, &b = same.batch().labels.act, &c = warped.batch().labels.act;
+  for (std::size_t i = 0; i < a.floats(); ++i) REQUIRE(a.data[i] == b.data[i]);
+  for (std::size_t i = 0; i < c.floats(); ++i) REQUIRE((c.data[i] == 0.f || c.data[i] == 1.f));
+  const int d = cfg.downscale;
+  for (int k : {0, cfg.n_masks - 1}) {  // the current mask and the farthest future one
+    const auto before = centroid(a, k, d), after = centroid(c, k, d);
+    REQUIRE(before[2] > 1000);  // the dancer covers thousands of cells
+    const auto want = warp_point(s, before[0], before[1], cfg.sensor_width, cfg.sensor_height);
+    CHECK(after[0] == Approx(want[0]).margin(1.5));
+    CHECK(after[1] == Approx(want[1]).margin(1.5));
+    CHECK(after[2] == Approx(before[2] * s.scale * s.scale).epsilon(0.1));
+  }
+  // The input moved with its labels: the share of the events' mass on the current mask holds.
+  auto on_mask = [&](const Batch& bt) {
+    const auto& in = bt.input.act;
+    const auto& lab = bt.labels.act;
+    double on = 0, all = 0;
+    for (std::size_t i = 0; i < in.pixels(); ++i) {
+      const double v = in.data[i * 16];  // channel 0 of frame 0
+      all += v;
+      on += v * lab.data[i * 16];
+    }
+    return on / all;
+  };
+  const double share = on_mask(plain.batch()), share_w = on_mask(warped.batch());
+  REQUIRE(share > 0.15);  // the rest: the background's events
+  CHECK(share_w == Approx(share).margin(0.03));
+  // Had the labels stayed put, part of the dancer's events would fall off them.
+  BatchBuilder input_only(cfg, 1, MaskSource::none);
+  input_only.add(w, unused, nullptr);
+  warp_frame(input_only.batch().input.act, 0, s, d, cfg.sensor_width, cfg.sensor_height);
+  CHECK(on_mask(input_only.batch()) < share - 0.05);
 }

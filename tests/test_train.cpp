@@ -362,6 +362,55 @@ TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bi
   CHECK(yelan::test::contains(none.err, "no recordings"));
 }
 
+TEST_CASE("train: --windows-per-visit decides the windows drawn, is kept in run.json, and --resume keeps to it", "[train][cli]") {
+  yelan::test::CliTempDir d("train-visit");
+  std::filesystem::create_directories(d / "ds/train");
+  std::filesystem::create_directories(d / "ds/val");
+  REQUIRE(yelan::test::run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.6s", "-o",
+                                d / "ds/train/t.yelan.h5"}).code == 0);
+  std::filesystem::copy_file(d / "ds/train/t.yelan.h5", d / "ds/val/v.yelan.h5");
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> v = {"train", "--stage", "mask", "--config", "micro", "--data", d / "ds", "--mask-frames", "1",
+                                  "--epoch-steps", "4", "--val-windows", "1", "--batch", "2", "--threads", "1",
+                                  "-o", d / out, "--steps", "4"};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  auto losses = [&](const std::string& out) {  // the training loss column, step by step
+    std::istringstream in(yelan::test::slurp(d / (out + "/log.csv")));
+    std::string line, all;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      std::istringstream l(line);
+      std::string c;
+      for (int k = 0; k < 3; ++k) std::getline(l, c, ',');
+      all += c + ";";
+    }
+    return all;
+  };
+  const auto one = run("one", {"--windows-per-visit", "1"}), eight = run("eight", {});
+  INFO(one.err);
+  REQUIRE(one.code == 0);
+  REQUIRE(eight.code == 0);
+  // Same seed, same recording, other windows: the first step already trains on others.
+  CHECK(losses("one") != losses("eight"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "one/run.json"), "\"windows_per_visit\": 1,"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "eight/run.json"), "\"windows_per_visit\": 8,"));
+  // Interrupted at step 2 and resumed with its own N: the uninterrupted run, byte for byte;
+  // resumed with another N: refused, naming the N to give.
+  REQUIRE(run("b", {"--windows-per-visit", "1", "--stop-at", "2"}).code == 0);
+  const auto other = run("b", {"--windows-per-visit", "3", "--resume"});
+  CHECK(other.code != 0);
+  CHECK(yelan::test::contains(other.err, "--windows-per-visit 1"));
+  REQUIRE(run("b", {"--windows-per-visit", "1", "--resume"}).code == 0);
+  CHECK(yelan::test::slurp(d / "b/final.h5") == yelan::test::slurp(d / "one/final.h5"));
+  CHECK(run("zero", {"--windows-per-visit", "0"}).code == 2);
+  const auto sim = yelan::test::run_cli({"train", "--stage", "mask", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                         "-o", d / "s", "--steps", "1", "--windows-per-visit", "2"});
+  CHECK(sim.code == 2);
+  CHECK(yelan::test::contains(sim.err, "--data only"));
+}
+
 TEST_CASE("train: the validation windows come from every recording of the val split in turn", "[train][cli]") {
   yelan::test::CliTempDir d("train-val-spread");
   std::filesystem::create_directories(d / "ds/train");

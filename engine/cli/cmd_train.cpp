@@ -52,7 +52,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   const Args a("train", argv,
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
-                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight"},
+                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight",
+                "--windows-per-visit"},
                {"--occlusion", "--warp", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
@@ -126,9 +127,10 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
     throw UsageError("--lr-schedule '" + spec.lr_schedule + "': expected cosine or step");
   spec.warmup_steps = a.int_value_or("--warmup-steps", std::min<int>(100, int(spec.steps / 10)), 0, 1 << 30);
   spec.history_s = a.number_or("--history", 5, 0, 60);
+  spec.windows_per_visit = a.int_value_or("--windows-per-visit", 8, 1, 1 << 10);
+  if (a.value("--windows-per-visit") && !data) throw UsageError("--windows-per-visit: for --data only (recordings on disk)");
   spec.occlusion = a.flag("--occlusion");
   spec.warp = a.flag("--warp");
-  if (spec.warp && spec.stage != "pose") throw UsageError("--warp: for --stage pose only");
   spec.empty_weight = float(a.number_or("--empty-weight", 1, 0, 1e3, true));
   if (spec.empty_weight != 1 && spec.stage != "mask") throw UsageError("--empty-weight: for --stage mask only");
   spec.dice_weight = float(a.number_or("--dice-weight", 0, 0, 100));

@@ -82,6 +82,7 @@ const std::vector<Command>& commands() {
        "                   [--steps 1000] [--batch 8] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
        "                   [--lr-schedule cosine|step] [--warmup-steps N] [--history 5] [--val-windows N]\n"
        "                   [--stop-at STEP] [--mask-frames F] [--empty-weight W] [--dice-weight D]\n"
+       "                   [--windows-per-visit 8]\n"
        "                   [--occlusion] [--warp] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
        "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
        "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
@@ -101,14 +102,18 @@ const std::vector<Command>& commands() {
        "--mask-frames F (mask stage): training windows of F frames instead of the config's S (the\n"
        "U-Net sees one frame at a time: windows of 1 frame give S times the distinct samples per\n"
        "step's cost); validation keeps S.\n"
-       "--warp (pose stage): each training window's input and joints under one random\n"
-       "similarity (scale 0.8-1.25, rotation +-15 deg, shift +-10% of the frame), as a camera\n"
-       "rolled and panned and the dancer nearer or farther; validation is never warped.\n"
+       "--warp: each training window's input and targets (joints, or the mask stage's masks)\n"
+       "under one random similarity (scale 0.8-1.25, rotation +-15 deg, shift +-10% of the\n"
+       "frame), as a camera rolled and panned and the dancer nearer or farther; validation is\n"
+       "never warped.\n"
        "--empty-weight W (mask stage): a window whose current frame shows nobody counts W times\n"
        "a dancer's in the loss (a weighted mean over the batch); validation is never weighted.\n"
        "--dice-weight D (mask stage): adds D times the soft Dice loss of the current mask (the\n"
        "overlap the mask IoU scores; per-pixel BCE is mostly the background's); the validation\n"
-       "loss leaves it out, so it compares across runs.\n",
+       "loss leaves it out, so it compares across runs.\n"
+       "--windows-per-visit N (--data): a batch draws from --batch recordings at once, each\n"
+       "serving N windows in increasing time, read in one pass, before the next recording (more\n"
+       "read the history less often; --resume needs the run's own N, kept in run.json).\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"

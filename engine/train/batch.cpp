@@ -67,7 +67,6 @@ std::array<std::uint8_t, kJoints> valid_joints(const Batch& b, int f) {
 
 void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ, const Similarity* warp) {
   if (used_ >= windows_) throw std::logic_error("batch is full");
-  if (warp && source_ == MaskSource::none) throw std::logic_error("the geometric augmentation is for the pose stage");
   const int S = cfg_.window, d = cfg_.downscale, H = cfg_.height(), W = cfg_.width();
   const int sw = w.camera.width, sh = w.camera.height;
   if (sw != cfg_.sensor_width || sh != cfg_.sensor_height)
@@ -135,9 +134,18 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
       input::apply_mask(in, used_ * S + t, keep);
     }
   }
-  // Last, so the input is warped whole, masks and occluders with it.
+  // Last, so the input is warped whole, masks and occluders with it; the mask stage's
+  // labels move with it (resampled, then binary again at half a cell).
   if (warp)
-    for (int t = 0; t < S; ++t) warp_frame(in, used_ * S + t, *warp, d, sw, sh);
+    for (int t = 0; t < S; ++t) {
+      const int n = used_ * S + t;
+      warp_frame(in, n, *warp, d, sw, sh);
+      if (source_ != MaskSource::none) continue;
+      const layers::Act& lab = b_.labels.act;
+      warp_frame(lab, n, *warp, d, sw, sh);
+      float* p = lab.data + std::size_t(n) * lab.cb() * lab.pixels() * 16;
+      for (std::size_t i = 0; i < std::size_t(lab.cb()) * lab.pixels() * 16; ++i) p[i] = p[i] >= 0.5f ? 1.f : 0.f;
+    }
   ++used_;
 }
 

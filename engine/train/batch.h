@@ -49,7 +49,7 @@ class BatchBuilder {
   void clear() { used_ = 0; }
   // Appends one window (its first cfg.window frames are inputs; the mask stage's labels
   // use the frames after them too). `mask_net` runs (frozen) for MaskSource::net only.
-  // `warp` (pose stage only): one similarity for the whole window, input and joints.
+  // `warp`: one similarity for the whole window: input, joints and (mask stage) labels.
   void add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occlusion,
            const Similarity* warp = nullptr);
   const Batch& batch() const { return b_; }

@@ -219,11 +219,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.lr_schedule != "cosine" && spec.lr_schedule != "step")
     throw std::invalid_argument("LR schedule must be cosine or step, got '" + spec.lr_schedule + "'");
   const bool cosine = spec.lr_schedule == "cosine";
-  if (spec.warp && !pose_stage) throw std::invalid_argument("the geometric augmentation (warp) is for the pose stage");
   if (spec.empty_weight != 1 && pose_stage) throw std::invalid_argument("the empty-scene weight is for the mask stage");
   if (!(spec.empty_weight > 0)) throw std::invalid_argument("the empty-scene weight must be > 0");
   if (spec.dice_weight != 0 && pose_stage) throw std::invalid_argument("the Dice weight is for the mask stage");
   if (!(spec.dice_weight >= 0)) throw std::invalid_argument("the Dice weight must be >= 0");
+  if (spec.windows_per_visit < 1) throw std::invalid_argument("windows per visit must be >= 1");
   if (spec.mask_frames < 0 || (pose_stage && spec.mask_frames > 0))
     throw std::invalid_argument("frames per mask window: the mask stage only, and >= 1");
   // The training windows' shape; validation, weights and the saved config keep cfg's.
@@ -246,6 +246,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     std::ifstream in(run_json);
     const auto j = nlohmann::json::parse(in, nullptr, false);
     if (!j.is_discarded() && j.contains("train_files") && j["train_files"].is_array() && j.contains("val_files")) {
+      // Another number of windows per visit draws other windows: not the run being resumed.
+      const int wpv = j.contains("windows_per_visit") && j["windows_per_visit"].is_number_integer() ? j["windows_per_visit"].get<int>() : 8;
+      if (wpv != spec.windows_per_visit)
+        throw std::invalid_argument(run_json + ": the run read " + std::to_string(wpv) + " windows per visit, not " +
+                                    std::to_string(spec.windows_per_visit) + " (resume with --windows-per-visit " +
+                                    std::to_string(wpv) + ")");
       train_files = j["train_files"].get<std::vector<std::string>>();
       val_files = j["val_files"].get<std::vector<std::string>>();
       if (train_files.size() != spec.data.size() || val_files.size() != spec.val_data.size())
@@ -260,6 +266,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"steps", spec.steps},           {"steps_per_epoch", spec.steps_per_epoch},
                                       {"lr", spec.adam.lr},            {"lr_schedule", spec.lr_schedule},
                                       {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
+                                      {"windows_per_visit", spec.windows_per_visit},
                                       {"occlusion", spec.occlusion},   {"warp", spec.warp},
                                       {"empty_weight", spec.empty_weight}, {"dice_weight", spec.dice_weight},
                                       {"seed", spec.seed},
@@ -325,10 +332,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   set_window(so, tcfg.window);
   so.history_s = spec.history_s;
   if (spec.history_s * 1e6 >= double(so.tore.tau_us)) {
-    // A batch's windows from `batch` recordings at once, 8 windows per visit read in one
-    // pass: equal, value for value, to seeking each window (events past tau read 0).
+    // A batch's windows from `batch` recordings at once, several windows per visit read in
+    // one pass: equal, value for value, to seeking each window (events past tau read 0).
     so.cursors = spec.batch;
-    so.windows_per_visit = 8;
+    so.windows_per_visit = spec.windows_per_visit;
   }
   so.shuffle = true;
   so.counts = cfg.representation == "counts";

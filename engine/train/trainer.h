@@ -47,9 +47,14 @@ struct TrainSpec {
   // Recordings: a window's TORE holds the events of up to this long before its first frame
   // (5 s: everything TORE reads, as `yelan run` has it).
   double history_s = 5;
+  // Recordings (with history): each visit to a recording serves this many windows, read in
+  // one pass (window_stream.h). More windows per visit read the 5 s of history less often
+  // (a mask window of 1 frame spans 16 frames of a 245-frame recording, so 15 fit); fewer
+  // renew a batch's recordings more often.
+  int windows_per_visit = 8;
   double checkpoint_minutes = 10;
   bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
-  bool warp = false;                // pose stage: a random similarity per window (augment.h)
+  bool warp = false;                // a random similarity per window, input and targets (augment.h)
   float empty_weight = 1;           // mask stage: a window showing nobody weighs this much in
                                     // the loss (nobody_weights); validation is never weighted
   float dice_weight = 0;            // mask stage: the soft Dice term's weight (mask_loss); the
