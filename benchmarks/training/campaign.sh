@@ -294,7 +294,10 @@ case "$what" in
   # mask-s11: mask-s10 with the geometric augmentation (--warp moves the masks with the
   # input): the same start, rate and steps, so the two compare. The mask net scores IoU 0.79
   # on its own training recordings against 0.70 on validation (dancers, 2026-11-28): the gap,
-  # not the fit, is what stands between it and 0.8.
+  # not the fit, is what stands between it and 0.8. Run 2026-11-28 to step 516: worse than
+  # mask-s10 at steps 250 and 500 (validation IoU 0.575 against 0.662 at the cut 0.1), so
+  # stopped. On a new machine mask-s8's weights are the mask group of the twelfth session's
+  # default (git show 1943285:models/default.h5 > F; MASK_S11_INIT=F); the losses repeat.
   train-mask-s11)
     DATA=$DATA_S6 BATCH=32 train mask mask-s11 "${MASK_S11_STEPS:-1000}" --lr 1e-4 --mask-frames 1 --warp \
       --init "${MASK_S11_INIT:-$RUNS/mask-s8/final.h5}" ;;
