@@ -291,6 +291,12 @@ case "$what" in
   train-mask-s10)
     DATA=$DATA_S6 BATCH=32 train mask mask-s10 "${MASK_S10_STEPS:-1000}" --lr 1e-4 --mask-frames 1 \
       --init "${MASK_S10_INIT:-$RUNS/mask-s8/final.h5}" ;;
+  # mask-s10-wpv15: mask-s10's recipe reading 15 windows a recording visit instead of 8 (28%
+  # less time a step on ds-s6). Run 2026-11-28 with --stop-at 250, then 500 (STOP_AT=N):
+  # no accuracy lost against mask-s10 at the same steps (models/README, thirteenth session).
+  train-mask-s10-wpv15)
+    DATA=$DATA_S6 BATCH=32 train mask mask-s10-wpv15 "${MASK_S10_STEPS:-1000}" --lr 1e-4 --mask-frames 1 \
+      --windows-per-visit 15 ${STOP_AT:+--stop-at "$STOP_AT"} --init "${MASK_S10_INIT:-$RUNS/mask-s8/final.h5}" ;;
   # mask-s11: mask-s10 with the geometric augmentation (--warp moves the masks with the
   # input): the same start, rate and steps, so the two compare. The mask net scores IoU 0.79
   # on its own training recordings against 0.70 on validation (dancers, 2026-11-28): the gap,
@@ -317,7 +323,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s11; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
