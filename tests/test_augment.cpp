@@ -1,5 +1,5 @@
-// The geometric augmentation: a warped picture and its warped joints (or masks) agree, the
-// identity changes nothing, and the trainer's batch carries both.
+// The geometric augmentation: a warped (or mirrored) picture and its warped (mirrored)
+// joints or masks agree, the identity changes nothing, and the trainer's batch carries both.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -23,6 +23,19 @@ std::array<double, 3> centroid(const yelan::layers::Act& a, int c, int d) {
       sx += v * (x + 0.5) * d, sy += v * (y + 0.5) * d, m += v;
     }
   return {sx / m, sy / m, m};
+}
+
+// One window of a preset with the frames the mask stage's labels read after its input.
+yelan::camera::sim::SimWindow mask_stage_window(const yelan::ModelConfig& cfg, const std::string& preset) {
+  namespace sim = yelan::camera::sim;
+  sim::WindowStreamOptions o;
+  o.window = cfg.window + cfg.n_masks - 1;
+  o.warmup_s = 0.1;
+  o.scene_s = o.warmup_s + o.window / o.frame_hz + 1e-6;
+  sim::SimWindowStream stream({sim::preset_spec(preset)}, 5, o);
+  sim::SimWindow w;
+  stream.next(w);
+  return w;
 }
 
 }  // namespace
@@ -115,13 +128,7 @@ TEST_CASE("augment: the mask stage's labels move with its warped input and stay 
   namespace sim = yelan::camera::sim;
   yelan::ModelConfig cfg = yelan::load_model_config(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-nomask.json");
   cfg.window = 1;  // as --mask-frames 1 trains: one input frame, n_masks label frames
-  sim::WindowStreamOptions o;
-  o.window = cfg.window + cfg.n_masks - 1;
-  o.warmup_s = 0.1;
-  o.scene_s = o.warmup_s + o.window / o.frame_hz + 1e-6;
-  sim::SimWindowStream stream({sim::preset_spec("ben-dance7-front-high-static")}, 5, o);
-  sim::SimWindow w;
-  stream.next(w);
+  const sim::SimWindow w = mask_stage_window(cfg, "ben-dance7-front-high-static");
   yelan::MaskNet unused(cfg);
   BatchBuilder plain(cfg, 1, MaskSource::none), same(cfg, 1, MaskSource::none), warped(cfg, 1, MaskSource::none);
   const Similarity id{}, s{0.85, 0.2, 40, -10};  // shrunk: the whole dancer stays in the frame
@@ -160,4 +167,89 @@ TEST_CASE("augment: the mask stage's labels move with its warped input and stay 
   input_only.add(w, unused, nullptr);
   warp_frame(input_only.batch().input.act, 0, s, d, cfg.sensor_width, cfg.sensor_height);
   CHECK(on_mask(input_only.batch()) < share - 0.05);
+}
+
+TEST_CASE("augment: a mirrored frame trades cell x with w - 1 - x in every channel, and twice is the frame", "[train]") {
+  yelan::layers::ActBuf buf;
+  buf.resize(2, 20, 3, 7);  // two channel blocks, an odd width (the middle column stays)
+  const yelan::layers::Act& a = buf.act;
+  auto at = [&](int n, int c, int y, int x) -> float& {
+    return a.data[((std::size_t(n) * a.cb() + c / 16) * a.pixels() + std::size_t(y) * a.w + x) * 16 + c % 16];
+  };
+  for (int n = 0; n < 2; ++n)
+    for (int c = 0; c < 20; ++c)
+      for (int y = 0; y < 3; ++y)
+        for (int x = 0; x < 7; ++x) at(n, c, y, x) = float(n * 10000 + c * 100 + y * 10 + x);
+  flip_frame(a, 1);
+  for (int c = 0; c < 20; ++c)
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 7; ++x) {
+        REQUIRE(at(1, c, y, x) == float(10000 + c * 100 + y * 10 + (6 - x)));
+        REQUIRE(at(0, c, y, x) == float(c * 100 + y * 10 + x));  // the other frame untouched
+      }
+  flip_frame(a, 1);
+  for (int c = 0; c < 20; ++c) CHECK(at(1, c, 2, 1) == float(10000 + c * 100 + 21));
+}
+
+TEST_CASE("augment: a mirrored joint projects to the mirrored image point, its v and depth kept", "[train]") {
+  const Intrinsics k{485, 480, 171, 128, 346, 260};
+  const std::array<double, 3> p{-300, 200, 3800};
+  const auto q = flip_joint(p, k, 173, 2);
+  const double u = k.fx * p[0] / p[2] + k.cx;
+  CHECK(k.fx * q[0] / q[2] + k.cx == Approx(346 - u).margin(1e-9));
+  CHECK(q[1] == p[1]);
+  CHECK(q[2] == p[2]);
+  const auto back = flip_joint(q, k, 173, 2);
+  for (int i = 0; i < 3; ++i) CHECK(back[i] == Approx(p[i]).margin(1e-9));
+}
+
+TEST_CASE("augment: a mirrored batch is the plain one mirrored, labels and joints with it, left and right swapped", "[train]") {
+  namespace sim = yelan::camera::sim;
+  yelan::ModelConfig cfg = yelan::load_model_config(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-nomask.json");
+  cfg.window = 1;
+  const sim::SimWindow w = mask_stage_window(cfg, "ben-dance7-right-high-static");
+  yelan::MaskNet unused(cfg);
+  const Similarity s{0.9, 0.1, 20, -5};
+  for (const MaskSource src : {MaskSource::none, MaskSource::truth}) {
+    for (const bool warped : {false, true}) {
+      INFO("mask stage " << (src == MaskSource::none) << ", warped " << warped);
+      BatchBuilder plain(cfg, 1, src), mirrored(cfg, 1, src);
+      plain.add(w, unused, nullptr, warped ? &s : nullptr);
+      mirrored.add(w, unused, nullptr, warped ? &s : nullptr, true);
+      const Batch &a = plain.batch(), &b = mirrored.batch();
+      // The input and (mask stage) every label plane: exactly the plain batch's, mirrored.
+      std::vector<const yelan::layers::Act*> planes = {&a.input.act};
+      if (src == MaskSource::none) planes.push_back(&a.labels.act);
+      for (std::size_t i = 0; i < planes.size(); ++i) {
+        const auto& pa = *planes[i];
+        const auto& pb = i == 0 ? b.input.act : b.labels.act;
+        double mass = 0;
+        for (int cb = 0; cb < pa.cb(); ++cb)
+          for (int y = 0; y < pa.h; ++y)
+            for (int x = 0; x < pa.w; ++x)
+              for (int l = 0; l < 16; ++l) {
+                const std::size_t ia = ((std::size_t(cb) * pa.pixels()) + std::size_t(y) * pa.w + x) * 16 + l;
+                const std::size_t ib = ((std::size_t(cb) * pa.pixels()) + std::size_t(y) * pa.w + (pa.w - 1 - x)) * 16 + l;
+                REQUIRE(pb.data[ib] == pa.data[ia]);
+                mass += pa.data[ia];
+              }
+        CHECK(mass > 100);  // something there to mirror
+      }
+      // The joints: the partner's, mirrored through the camera; their validity swaps too.
+      const int pairs[13] = {0, 2, 1, 4, 3, 6, 5, 8, 7, 10, 9, 12, 11};
+      int valid = 0;
+      for (int j = 0; j < kJoints; ++j) {
+        const int pj = pairs[j];
+        REQUIRE(b.valid_u8[std::size_t(j)] == a.valid_u8[std::size_t(pj)]);
+        const auto want = flip_joint(a.truth_mm[0][std::size_t(pj)], a.k, cfg.width(), cfg.downscale);
+        for (int c = 0; c < 3; ++c) CHECK(b.truth_mm[0][std::size_t(j)][std::size_t(c)] == Approx(want[std::size_t(c)]).margin(1e-6));
+        if (!b.valid_u8[std::size_t(j)]) continue;
+        ++valid;
+        const auto n = normalise_joint(want, b.k, b.z_ref[0]);
+        for (int c = 0; c < 3; ++c) CHECK(b.target[std::size_t(j) * 3 + std::size_t(c)] == Approx(n[std::size_t(c)]).margin(1e-6));
+      }
+      CHECK(valid >= 10);
+      CHECK(b.z_ref[0] == a.z_ref[0]);
+    }
+  }
 }

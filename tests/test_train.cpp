@@ -402,9 +402,18 @@ TEST_CASE("train: --windows-per-visit decides the windows drawn, is kept in run.
   const auto other = run("b", {"--windows-per-visit", "3", "--resume"});
   CHECK(other.code != 0);
   CHECK(yelan::test::contains(other.err, "--windows-per-visit 1"));
+  // So is a resume with an augmentation the run did not have (--flip: mirrored windows).
+  const auto mirrored = run("b", {"--windows-per-visit", "1", "--flip", "--resume"});
+  CHECK(mirrored.code != 0);
+  CHECK(yelan::test::contains(mirrored.err, "trained without --flip"));
   REQUIRE(run("b", {"--windows-per-visit", "1", "--resume"}).code == 0);
   CHECK(yelan::test::slurp(d / "b/final.h5") == yelan::test::slurp(d / "one/final.h5"));
   CHECK(run("zero", {"--windows-per-visit", "0"}).code == 2);
+  // --flip mirrors some of the same windows: other losses, and run.json says so.
+  REQUIRE(run("f", {"--windows-per-visit", "1", "--flip"}).code == 0);
+  CHECK(losses("f") != losses("one"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "f/run.json"), "\"flip\": true,"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "one/run.json"), "\"flip\": false,"));
   const auto sim = yelan::test::run_cli({"train", "--stage", "mask", "--config", "micro", "--sim", "ben-dance3-front-high-static",
                                          "-o", d / "s", "--steps", "1", "--windows-per-visit", "2"});
   CHECK(sim.code == 2);

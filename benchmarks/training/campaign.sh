@@ -307,6 +307,13 @@ case "$what" in
   train-mask-s11)
     DATA=$DATA_S6 BATCH=32 train mask mask-s11 "${MASK_S11_STEPS:-1000}" --lr 1e-4 --mask-frames 1 --warp \
       --init "${MASK_S11_INIT:-$RUNS/mask-s8/final.h5}" ;;
+  # mask-s12: mask-s10-wpv15's recipe with --flip (half the windows mirrored left to right:
+  # exact, where --warp resampled the TORE and lost IoU): the same start, rate, steps and
+  # validation windows, so the two compare step for step. The right views score IoU 0.585 on
+  # test-s8 against the left's 0.819. MASK_S12_INIT as MASK_S11_INIT above.
+  train-mask-s12)
+    DATA=$DATA_S6 BATCH=32 train mask mask-s12 "${MASK_S12_STEPS:-1000}" --lr 1e-4 --mask-frames 1 \
+      --windows-per-visit 15 --flip ${STOP_AT:+--stop-at "$STOP_AT"} --init "${MASK_S12_INIT:-$RUNS/mask-s8/final.h5}" ;;
   # Can the shipped pose net fit 16 recordings? Every 12th dancer recording of ds-s3's
   # training split (16), trained and validated on the same 16 from the shipped net, lr 1e-3
   # cosine. Run 2026-11-27 (MPJPE 90 mm on them at step 250; stopped at 367): it memorises
@@ -323,7 +330,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&

@@ -7,18 +7,22 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <ctime>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
+#include <thread>
 #include <tuple>
+#include <vector>
 
 #include "camera/io/format_error.h"
 
@@ -142,19 +146,22 @@ void use_vet_cache(const std::string& path) {
   g_cache_loaded = false;
 }
 
-void vet_in_child(const std::string& path, const std::function<void()>& read_all, const UntrustedLimits& limits) {
-  if (g_child) return;
+namespace {
+
+// vet_in_child, saying whether a child ran.
+bool vet_once(const std::string& path, const std::function<void()>& read_all, const UntrustedLimits& limits) {
+  if (g_child) return false;
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return;  // the real read says what is wrong
+  if (::stat(path.c_str(), &st) != 0) return false;  // the real read says what is wrong
   {
     std::lock_guard<std::mutex> lock(g_mutex);
     load_cache_locked();
-    if (g_passed.count(identity(st))) return;
+    if (g_passed.count(identity(st))) return false;
   }
   const bool settled = now_ns() - ns(st.st_ctim) >= kSettledNs;
   const unsigned long long memory_limit = address_space_bytes() + limits.memory_bytes;
   const pid_t pid = ::fork();
-  if (pid < 0) return;  // cannot isolate: read as before rather than refuse
+  if (pid < 0) return false;  // cannot isolate: read as before rather than refuse
   if (pid == 0) {
     g_child = true;
     if (!std::getenv("YELAN_VET_STDERR")) {  // libhdf5's and the sanitizers' words stay out of the user's way
@@ -181,14 +188,14 @@ void vet_in_child(const std::string& path, const std::function<void()>& read_all
   }
   int status = 0;
   while (::waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return;
+    if (errno != EINTR) return true;
   if (WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 3)) {
     if (WEXITSTATUS(status) == 0) {
       std::lock_guard<std::mutex> lock(g_mutex);
       g_passed.insert(identity(st));
       if (settled) remember_on_disk_locked(identity(st));
     }
-    return;
+    return true;
   }
   std::string why;
   if (WIFSIGNALED(status)) {
@@ -201,6 +208,38 @@ void vet_in_child(const std::string& path, const std::function<void()>& read_all
     why = "reading it failed in libhdf5 (exit " + std::to_string(WEXITSTATUS(status)) + ", a sanitizer report?)";
   }
   throw FormatError(path, 0, "corrupt HDF5 file: " + why);
+}
+
+}  // namespace
+
+void vet_in_child(const std::string& path, const std::function<void()>& read_all, const UntrustedLimits& limits) {
+  vet_once(path, read_all, limits);
+}
+
+// Threads only wait on their children: none of them touches libhdf5 in this process, so a
+// fork from one never copies another's half-held library state.
+std::size_t vet_all_in_children(const std::vector<std::string>& paths,
+                                const std::function<void(const std::string&)>& read_all, int jobs,
+                                const UntrustedLimits& limits) {
+  if (g_child || paths.empty()) return 0;
+  std::atomic<std::size_t> next{0}, ran{0};
+  std::vector<std::exception_ptr> failed(paths.size());
+  const auto work = [&] {
+    for (std::size_t i; (i = next++) < paths.size();) {
+      try {
+        if (vet_once(paths[i], [&] { read_all(paths[i]); }, limits)) ++ran;
+      } catch (...) {
+        failed[i] = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> helpers;
+  for (int t = 1; t < jobs && std::size_t(t) < paths.size(); ++t) helpers.emplace_back(work);
+  work();
+  for (auto& h : helpers) h.join();
+  for (const auto& f : failed)
+    if (f) std::rethrow_exception(f);
+  return ran;
 }
 
 }  // namespace yelan::camera

@@ -66,6 +66,11 @@ void read_whole_recording(const std::string& path) {
 // A FormatError: a malformed recording is bad input (exit 2), as any other malformed file.
 void recording_error(const std::string& path, const std::string& what) { throw FormatError(path, 0, what); }
 
+std::size_t vet_recordings(const std::vector<std::string>& paths, int jobs) {
+  h5::silence_errors();
+  return vet_all_in_children(paths, [](const std::string& p) { read_whole_recording(p); }, jobs);
+}
+
 h5::H5Id open_recording(const std::string& path) {
   h5::silence_errors();
   vet_in_child(path, [&] { read_whole_recording(path); });

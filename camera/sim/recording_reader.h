@@ -4,6 +4,7 @@
 // child process (camera/io/untrusted.h) before this process opens it. Malformed files are
 // FormatErrors naming the file (exit 2).
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -45,6 +46,12 @@ std::vector<std::string> list_recordings(const std::string& dir);
 // and at least one when there are two or more. Throws with fewer than two.
 void split_by_recording(const std::vector<std::string>& all, std::vector<std::string>& train,
                         std::vector<std::string>& val);
+
+// Vets recordings before they are opened, `jobs` at a time (camera/io/untrusted.h): for a
+// training or an evaluation about to open hundreds, called before it allocates its networks.
+// Returns how many were read in a child (those not vetted before). Throws the first
+// FormatError.
+std::size_t vet_recordings(const std::vector<std::string>& paths, int jobs);
 
 // For readers that keep the file open (RecordingWindowStream): the file, vetted and opened,
 // and its info read from the open file.

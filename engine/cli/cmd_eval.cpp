@@ -15,6 +15,7 @@
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
 #include "engine/cli/output_path.h"
+#include "engine/cli/vet_recordings.h"
 #include "engine/run/stream_eval.h"
 #include "engine/threads.h"
 #include "engine/train/evaluate.h"
@@ -48,8 +49,9 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   std::size_t count = 0;
   if (!spec.recordings.empty()) {
     // The first --skip s of a recording (the TORE still filling) are not scored, as calibrate does.
-    r = run::evaluate_recordings(spec.weights, spec.recordings, spec.seconds_per_scene, a.number_or("--skip", 0.5, 0, 3600), o, err,
-                                 keep);
+    const double skip = a.number_or("--skip", 0.5, 0, 3600);
+    vet_recordings_up_front(spec.recordings, err);
+    r = run::evaluate_recordings(spec.weights, spec.recordings, spec.seconds_per_scene, skip, o, err, keep);
     count = spec.recordings.size();
     what = std::to_string(count) + " recordings";
   } else {
@@ -107,10 +109,18 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
   if (simv && data) throw UsageError("give --sim or --data, not both");
+  // Refused before the recordings are listed: a usage error names the flag whatever DIR holds.
+  if (data && a.value("--low-light-dn"))
+    throw UsageError("--low-light-dn is for --sim scenes (a recording's light is in its events)");
   if (const auto j = a.value("--json")) check_output("--json", *j, {*wpath});
   if (const auto p = a.value("--poses")) {
     if (!a.flag("--run")) throw UsageError("--poses is for eval --run (the deployed path's poses)");
     check_output("--poses", *p, {*wpath});
+  }
+  if (const auto t = a.value("--threads")) {
+    const auto n = parse_thread_count(*t);
+    if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
+    set_threads(*n);
   }
   train::EvalSpec spec;
   spec.weights = *wpath;
@@ -142,16 +152,11 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
     spec.scenes = picked;
   }
   if (a.value("--low-light-dn")) {
-    if (data) throw UsageError("--low-light-dn is for --sim scenes (a recording's light is in its events)");
     const double dn = a.number_or("--low-light-dn", 20, 1e-3, 1e5);
     for (auto& sc : spec.scenes) camera::sim::set_low_light_dn(sc.scene, dn);
   }
-  if (const auto t = a.value("--threads")) {
-    const auto n = parse_thread_count(*t);
-    if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
-    set_threads(*n);
-  }
   if (a.flag("--run")) return eval_run(spec, a, out, err);
+  if (data) vet_recordings_up_front(spec.recordings, err);
   const train::EvalResult r = train::evaluate(spec, err);
   out << train::eval_table(r);
   if (const auto j = a.value("--json")) camera::write_file_atomically(*j, train::eval_json(r));

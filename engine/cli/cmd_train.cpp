@@ -11,6 +11,7 @@
 #include "engine/cli/args.h"
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
+#include "engine/cli/vet_recordings.h"
 #include "engine/threads.h"
 #include "engine/train/trainer.h"
 
@@ -54,7 +55,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight",
                 "--windows-per-visit"},
-               {"--occlusion", "--warp", "--resume", "--quiet"});
+               {"--occlusion", "--warp", "--flip", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
   const auto data = a.value("--data");
@@ -70,6 +71,11 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
     spec.cfg = load_model_config(*config);
   } catch (const ConfigError& e) {
     throw UsageError(e.what());
+  }
+  if (const auto t = a.value("--threads")) {
+    const auto n = parse_thread_count(*t);
+    if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
+    set_threads(*n);
   }
   if (simv) {
     spec.scenes = scenes_from(*simv);
@@ -93,6 +99,9 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
     } catch (const std::runtime_error& e) {
       throw UsageError(std::string("--data: ") + e.what());
     }
+    std::vector<std::string> every = spec.data;
+    every.insert(every.end(), spec.val_data.begin(), spec.val_data.end());
+    vet_recordings_up_front(every, err);
     if (spec.stage == "pose") {
       // Scenes with nobody in them teach stage 1 "nobody there"; stage 2 has no pose to learn.
       std::size_t dropped = 0;
@@ -131,6 +140,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   if (a.value("--windows-per-visit") && !data) throw UsageError("--windows-per-visit: for --data only (recordings on disk)");
   spec.occlusion = a.flag("--occlusion");
   spec.warp = a.flag("--warp");
+  spec.flip = a.flag("--flip");
   spec.empty_weight = float(a.number_or("--empty-weight", 1, 0, 1e3, true));
   if (spec.empty_weight != 1 && spec.stage != "mask") throw UsageError("--empty-weight: for --stage mask only");
   spec.dice_weight = float(a.number_or("--dice-weight", 0, 0, 100));
@@ -142,11 +152,6 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.max_cpu_minutes = a.number_or("--max-cpu-minutes", 0, 0, 1e7, true);
   spec.resume = a.flag("--resume");
   spec.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
-  if (const auto t = a.value("--threads")) {
-    const auto n = parse_thread_count(*t);
-    if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
-    set_threads(*n);
-  }
   const train::TrainResult r = train::train(spec, err);
   out << spec.out_dir << ": " << r.steps << " steps, last loss " << r.last_loss << ", best validation " << r.best_val
       << (r.early_stopped ? " (early stop)" : "") << (r.interrupted ? " (interrupted; --resume continues)" : "") << "\n";

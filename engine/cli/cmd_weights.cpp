@@ -14,6 +14,7 @@
 #include "engine/cli/cli.h"
 #include "engine/cli/handlers.h"
 #include "engine/cli/output_path.h"
+#include "engine/cli/vet_recordings.h"
 #include "engine/run/early_exit.h"
 #include "engine/run/presence.h"
 #include "camera/sim/recording_windows.h"
@@ -289,6 +290,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   const bool depth_tau_given = a.value("--depth-tau").has_value();
   if (depth_tau_given) opt.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
   if (a.flag("--depth-without-forearms")) opt.depth_forearms = false;
+  vet_recordings_up_front(recs, err);
   // Stage 1's cut first: presence is fitted on the share of the frame the cut mask covers.
   std::optional<double> cut;
   if (a.flag("--choose-mask-cut")) {

@@ -2,7 +2,9 @@
 // rotation, shift) applied to every frame's input and to the joints, as if the camera had
 // rolled, panned and the dancer stood nearer or farther. The joints stay a 3D pose whose
 // projection is the warped picture: image points move with the warp, and the body moves
-// along the optical axis so that its head's depth is z_ref / scale.
+// along the optical axis so that its head's depth is z_ref / scale. And a mirror image of
+// the window, left to right: cells trade places, nothing is resampled, so the input keeps
+// the statistics the camera gives (a warp's bilinear resampling smooths them).
 #pragma once
 #include <array>
 
@@ -30,5 +32,13 @@ void warp_frame(const layers::Act& a, int n, const Similarity& s, int d, int sen
 // (z_ref / scale): its projection is warp_point of the joint's, its depth offset from the
 // head unchanged.
 std::array<double, 3> warp_joint(const Similarity& s, const std::array<double, 3>& p, const Intrinsics& k, double z_ref);
+
+// Frame n of `a` mirrored left to right, every channel: cell x trades with cell w - 1 - x.
+void flip_frame(const layers::Act& a, int n);
+
+// A camera-frame joint under flip_frame's mirror of a picture `cells_w` cells of d pixels
+// wide: its image point u goes to cells_w * d - u (pixel i spans [i, i + 1), as in
+// warp_point), v and the depth kept. Left and right trade names too; the caller swaps them.
+std::array<double, 3> flip_joint(const std::array<double, 3>& p, const Intrinsics& k, int cells_w, int d);
 
 }  // namespace yelan::train

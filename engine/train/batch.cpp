@@ -65,7 +65,8 @@ std::array<std::uint8_t, kJoints> valid_joints(const Batch& b, int f) {
   return valid;
 }
 
-void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ, const Similarity* warp) {
+void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ, const Similarity* warp,
+                       bool flip) {
   if (used_ >= windows_) throw std::logic_error("batch is full");
   const int S = cfg_.window, d = cfg_.downscale, H = cfg_.height(), W = cfg_.width();
   const int sw = w.camera.width, sh = w.camera.height;
@@ -102,14 +103,28 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     const double zr0 = f.joints_mm[0].z();
     const double zr = warp ? zr0 / warp->scale : zr0;
     b_.z_ref[std::size_t(n)] = zr;
+    std::array<std::array<double, 3>, kJoints> ps;
+    std::array<bool, kJoints> oks;
     for (int j = 0; j < kJoints; ++j) {
-      std::array<double, 3> p{f.joints_mm[j].x(), f.joints_mm[j].y(), f.joints_mm[j].z()};
+      auto& p = ps[std::size_t(j)];
+      p = {f.joints_mm[j].x(), f.joints_mm[j].y(), f.joints_mm[j].z()};
       bool ok = f.valid[j] && p[2] > 1 && zr0 > 1;
       if (warp && ok) {
         p = warp_joint(*warp, p, b_.k, zr0);
         const double u = b_.k.fx * p[0] / p[2] + b_.k.cx, v = b_.k.fy * p[1] / p[2] + b_.k.cy;
         ok = p[2] > 1 && u >= 0 && u < sw && v >= 0 && v < sh;  // still in the picture
       }
+      if (flip && p[2] > 1) p = flip_joint(p, b_.k, W, d);
+      oks[std::size_t(j)] = ok;
+    }
+    if (flip)
+      for (int a = 1; a + 1 < kJoints; a += 2) {  // (right, left) pairs from the shoulders on
+        std::swap(ps[std::size_t(a)], ps[std::size_t(a + 1)]);
+        std::swap(oks[std::size_t(a)], oks[std::size_t(a + 1)]);
+      }
+    for (int j = 0; j < kJoints; ++j) {
+      const auto& p = ps[std::size_t(j)];
+      const bool ok = oks[std::size_t(j)];
       b_.truth_mm[std::size_t(n)][j] = p;
       const auto q = ok ? normalise_joint(p, b_.k, zr) : std::array<double, 3>{0, 0, 0};
       for (int c = 0; c < 3; ++c) b_.target[(std::size_t(n) * kJoints + j) * 3 + c] = float(q[c]);
@@ -145,6 +160,11 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
       warp_frame(lab, n, *warp, d, sw, sh);
       float* p = lab.data + std::size_t(n) * lab.cb() * lab.pixels() * 16;
       for (std::size_t i = 0; i < std::size_t(lab.cb()) * lab.pixels() * 16; ++i) p[i] = p[i] >= 0.5f ? 1.f : 0.f;
+    }
+  if (flip)
+    for (int t = 0; t < S; ++t) {
+      flip_frame(in, used_ * S + t);
+      if (source_ == MaskSource::none) flip_frame(b_.labels.act, used_ * S + t);
     }
   ++used_;
 }

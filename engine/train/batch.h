@@ -50,8 +50,10 @@ class BatchBuilder {
   // Appends one window (its first cfg.window frames are inputs; the mask stage's labels
   // use the frames after them too). `mask_net` runs (frozen) for MaskSource::net only.
   // `warp`: one similarity for the whole window: input, joints and (mask stage) labels.
+  // `flip`: then the whole window mirrored left to right (augment.h), the joints with it and
+  // left and right swapped.
   void add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occlusion,
-           const Similarity* warp = nullptr);
+           const Similarity* warp = nullptr, bool flip = false);
   const Batch& batch() const { return b_; }
   MaskSource source() const { return source_; }
 

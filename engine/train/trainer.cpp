@@ -252,6 +252,13 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         throw std::invalid_argument(run_json + ": the run read " + std::to_string(wpv) + " windows per visit, not " +
                                     std::to_string(spec.windows_per_visit) + " (resume with --windows-per-visit " +
                                     std::to_string(wpv) + ")");
+      // Nor does a run with other augmentations (run.json without a key: the option was off).
+      for (const auto& [key, on] : {std::pair<const char*, bool>{"occlusion", spec.occlusion}, {"warp", spec.warp}, {"flip", spec.flip}}) {
+        const bool was = j.contains(key) && j[key].is_boolean() && j[key].get<bool>();
+        if (was != on)
+          throw std::invalid_argument(run_json + ": the run was trained " + (was ? "with" : "without") + " --" + key +
+                                      " (resume " + (was ? "with" : "without") + " it)");
+      }
       train_files = j["train_files"].get<std::vector<std::string>>();
       val_files = j["val_files"].get<std::vector<std::string>>();
       if (train_files.size() != spec.data.size() || val_files.size() != spec.val_data.size())
@@ -268,6 +275,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
                                       {"windows_per_visit", spec.windows_per_visit},
                                       {"occlusion", spec.occlusion},   {"warp", spec.warp},
+                                      {"flip", spec.flip},
                                       {"empty_weight", spec.empty_weight}, {"dice_weight", spec.dice_weight},
                                       {"seed", spec.seed},
                                       {"mask_weights", spec.mask_weights}, {"init_weights", spec.init_weights},
@@ -476,7 +484,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       // Its own stream, so the occluders of a run with --warp are those of one without.
       sim::Rng wr(spec.seed, 0x3a9fu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       const Similarity warp = draw_similarity(wr, cfg.sensor_width, cfg.sensor_height);
-      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr);
+      sim::Rng fr(spec.seed, 0xf11bu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
+      const bool flip = spec.flip && fr.uniform() < 0.5;
+      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr, flip);
     }
     const double built = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     data_s += built;

@@ -55,6 +55,7 @@ struct TrainSpec {
   double checkpoint_minutes = 10;
   bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
   bool warp = false;                // a random similarity per window, input and targets (augment.h)
+  bool flip = false;                // half the windows mirrored left to right, input and targets (augment.h)
   float empty_weight = 1;           // mask stage: a window showing nobody weighs this much in
                                     // the loss (nobody_weights); validation is never weighted
   float dice_weight = 0;            // mask stage: the soft Dice term's weight (mask_loss); the

@@ -60,6 +60,40 @@ TEST_CASE("vetting in a child: a crash is an error naming the file, an ordinary 
   CHECK_THROWS_AS(camera::vet_in_child(good, [] { ::raise(SIGSEGV); }), camera::FormatError);
 }
 
+TEST_CASE("vetting many files up front: jobs at a time, the first failure in order after all ran, the rest remembered",
+          "[io][h5][untrusted]") {
+  test::ScratchDir d("untrusted-many");
+  std::vector<std::string> files;
+  for (int i = 0; i < 7; ++i) {
+    files.push_back(d.file("f" + std::to_string(i) + ".h5"));
+    test::write_text(files.back(), "file " + std::to_string(i));
+  }
+  // Files 2 and 5 crash their child; each child sees its own file's name.
+  const auto read_all = [](const std::string& p) {
+    if (p.ends_with("f2.h5") || p.ends_with("f5.h5")) ::raise(SIGSEGV);
+  };
+  for (const int jobs : {1, 3, 16}) {
+    camera::forget_vetted_files();
+    try {
+      camera::vet_all_in_children(files, read_all, jobs);
+      FAIL("two crashing files went unreported");
+    } catch (const camera::FormatError& e) {
+      CHECK(e.file() == files[2]);
+      CHECK_THAT(e.problem(), Catch::Contains("libhdf5 crashed reading it"));
+    }
+    // Every other file was read (the crash of file 2 stopped nothing) and is remembered.
+    for (int i : {0, 1, 3, 4, 6}) CHECK_NOTHROW(camera::vet_in_child(files[i], [] { ::raise(SIGSEGV); }));
+    CHECK_THROWS_AS(camera::vet_in_child(files[5], [] { ::raise(SIGSEGV); }), camera::FormatError);
+  }
+  // Children run only for the files not vetted before.
+  camera::forget_vetted_files();
+  const std::vector<std::string> good = {files[0], files[1], files[3]};
+  CHECK(camera::vet_all_in_children(good, read_all, 2) == 3);
+  CHECK(camera::vet_all_in_children(good, read_all, 2) == 0);
+  CHECK(camera::vet_all_in_children({}, read_all, 2) == 0);
+  CHECK(camera::vet_all_in_children({files[4], files[0]}, read_all, 2) == 1);
+}
+
 namespace {
 std::size_t cache_lines(const std::string& path) {
   std::ifstream in(path);
