@@ -429,3 +429,23 @@ TEST_CASE("a byte flipped inside a tensor's data: its checksum catches it, exit 
   CHECK(has(r.err, "tensor /pose/" + tensor + ": checksum mismatch"));
   CHECK_FALSE(std::filesystem::exists(d / "o.csv"));
 }
+
+#include <algorithm>
+
+#include "engine/cli/vet_recordings.h"
+
+TEST_CASE("recordings vetted up front: one line saying how many children ran, the stream's number format kept", "[cli]") {
+  yelan::test::CliTempDir d("vet-up-front");
+  std::vector<std::string> recs;
+  for (const char* n : {"a.yelan.h5", "b.yelan.h5", "c.yelan.h5"}) {
+    recs.push_back(d / n);
+    std::ofstream(recs.back()) << "not HDF5: an ordinary error, left to the real read";
+  }
+  std::ostringstream err;
+  yelan::cli::vet_recordings_up_front(recs, err);
+  const std::string line = err.str();
+  CHECK(yelan::test::contains(line, "vetted 3 of 3 recordings"));
+  CHECK(std::count(line.begin(), line.end(), '\n') == 1);
+  err << 0.123456 << " " << 2.0;  // what the caller prints next keeps its own precision
+  CHECK(yelan::test::contains(err.str(), " s\n0.123456 2"));
+}
