@@ -103,7 +103,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     const double zr0 = f.joints_mm[0].z();
     const double zr = warp ? zr0 / warp->scale : zr0;
     b_.z_ref[std::size_t(n)] = zr;
-    std::array<std::array<double, 3>, kJoints> ps;
+    Pose13 ps;
     std::array<bool, kJoints> oks;
     for (int j = 0; j < kJoints; ++j) {
       auto& p = ps[std::size_t(j)];
@@ -117,11 +117,10 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
       if (flip && p[2] > 1) p = flip_joint(p, b_.k, W, d);
       oks[std::size_t(j)] = ok;
     }
-    if (flip)
-      for (int a = 1; a + 1 < kJoints; a += 2) {  // (right, left) pairs from the shoulders on
-        std::swap(ps[std::size_t(a)], ps[std::size_t(a + 1)]);
-        std::swap(oks[std::size_t(a)], oks[std::size_t(a + 1)]);
-      }
+    if (flip) {
+      ps = swap_left_right(ps);
+      oks = swap_left_right(oks);
+    }
     for (int j = 0; j < kJoints; ++j) {
       const auto& p = ps[std::size_t(j)];
       const bool ok = oks[std::size_t(j)];

@@ -52,12 +52,6 @@ struct Mean {
 
 }  // namespace
 
-Pose13 swap_left_right(const Pose13& p) {
-  Pose13 out = p;
-  for (int a = 1; a < kJoints; a += 2) std::swap(out[a], out[a + 1]);  // (R, L) pairs from shoulders on
-  return out;
-}
-
 FloorStats training_floor_stats(int members, int times, bool framed) {
   Mean norm, rel;
   std::map<std::string, Mean> view;

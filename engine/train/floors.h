@@ -54,7 +54,4 @@ class SwapShare {
   std::map<std::string, std::pair<std::uint64_t, std::uint64_t>> n_;  // view -> (better swapped, frames)
 };
 
-// The pose with left and right joints exchanged.
-Pose13 swap_left_right(const Pose13& p);
-
 }  // namespace yelan::train

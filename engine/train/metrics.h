@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/train/pose_norm.h"
@@ -15,6 +16,14 @@ namespace yelan::train {
 
 inline constexpr int kJoints = 13;
 using Pose13 = std::array<std::array<double, 3>, kJoints>;
+
+// Per-joint values (a pose, validity flags) with left and right exchanged: the joints come in
+// (right, left) pairs from the shoulders on.
+template <class T>
+std::array<T, kJoints> swap_left_right(std::array<T, kJoints> p) {
+  for (std::size_t a = 1; a + 1 < p.size(); a += 2) std::swap(p[a], p[a + 1]);
+  return p;
+}
 
 struct PoseScores {
   double mpjpe_mm = 0, pck150 = 0, auc = 0, mpjpe_root_mm = 0, pck150_root = 0, auc_root = 0;
