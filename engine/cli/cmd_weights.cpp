@@ -23,6 +23,7 @@
 #include "weights_tools/network_io.h"
 #include "weights_tools/parse_json.h"
 #include "weights_tools/weights_file.h"
+#include "weights_tools/widen.h"
 
 namespace yelan::cli {
 namespace {
@@ -213,10 +214,16 @@ int combine(const Args& a, std::ostream& out) {
     if (s.is_object()) s.erase("role");
     return s;
   };
-  for (const char* key : {"input", "mask"})
+  // Without --config the pose file's config describes the result, so it must describe the mask
+  // net too; with it, --config must (a mask net of another width joins a pose net that way).
+  const bool own_config = a.value("--config").has_value();
+  for (const char* key : {"input", "mask"}) {
+    if (own_config && std::string(key) == "mask") continue;
     if (!cm.contains(key) || !cp.contains(key) || shape(cm, key) != shape(cp, key))
-      throw UsageError("weights combine: " + *m + " and " + *p + " differ in the config's '" + key +
-                       "' section, so the mask net does not fit the pose net's input");
+      throw UsageError("weights combine: " + *m + " and " + *p + " differ in the config's '" + key + "' section, so " +
+                       (std::string(key) == "input" ? "the mask net does not fit the pose net's input"
+                                                    : "the pose file's config does not describe the mask net (give --config)"));
+  }
   weights::Weights w = wp;
   w.groups["mask"] = wm.groups.at("mask");
   if (const auto c = a.value("--config")) {
@@ -236,6 +243,36 @@ int combine(const Args& a, std::ostream& out) {
   weights::save_weights(*o, w);
   out << "wrote " << *o << ": mask from " << *m << ", pose from " << *p
       << (a.value("--config") ? ", config from " + *a.value("--config") : std::string()) << "\n";
+  return kOk;
+}
+
+// A trained stage 1 in a wider mask net that computes the same (weights_tools/widen.h), with
+// the pose group as it was: the start of a training at the new width.
+int widen(const Args& a, std::ostream& out) {
+  a.expect_positionals(0, 0);
+  const auto in = a.value("--weights"), name = a.value("--config"), o = a.value("-o");
+  if (!in || !name || !o) throw UsageError("weights widen needs --weights OLD.h5 --config NAME|FILE -o OUT.h5 [--seed N]");
+  check_output("-o", *o, {*in, *name});
+  const int seed = a.int_value_or("--seed", 0, 0, 2147483647);
+  ModelConfig to;
+  try {
+    to = load_model_config(*name);
+  } catch (const ConfigError& e) {
+    throw UsageError(e.what());
+  }
+  weights::Weights w = weights::load_weights(*in);
+  const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
+  w.groups["mask"] = weights::widen_mask_group(w.groups["mask"], from, to, std::uint64_t(seed) * 2 + 1, *in);
+  w.config_json = to.json;
+  try {
+    const weights::LoadedNetworks fits(w, *in);
+  } catch (const std::exception& e) {
+    throw UsageError("weights widen: " + *in + "'s pose group does not fit --config " + *name + ": " + e.what());
+  }
+  weights::save_weights(*o, w);
+  out << "wrote " << *o << ": mask net widened from width_mult " << from.mask_width << " to " << to.mask_width << " ("
+      << from.unet_width(0) << " -> " << to.unet_width(0) << " channels at the top level; the same outputs), pose from " << *in
+      << ", config " << to.name << " (its run settings, not " << *in << "'s: calibrate after training)\n";
   return kOk;
 }
 
@@ -413,6 +450,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
                             {"--choose-beta", "--choose-mask-cut", "--depth-without-forearms"}),
                        out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
+    if (sub == "widen") return widen(Args("weights widen", rest, {"--weights", "--config", "-o", "--seed"}, {}), out);
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
     for (std::string line; std::getline(lines, line);) err << "yelan: error: " << printable(line) << "\n";
@@ -421,7 +459,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     err << "yelan: error: config JSON: " << printable(e.what()) << "\n";
     return kUsageError;
   }
-  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine, calibrate)");
+  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine, calibrate, widen)");
 }
 
 }  // namespace yelan::cli

@@ -1,0 +1,22 @@
+// A trained stage 1 carried into a wider U-Net that computes exactly what it computed: every
+// old weight kept in place, the new channels' own weights freshly initialised, and every
+// weight that reads a new channel into an old one zero. Training then starts from the old
+// net's accuracy instead of from scratch (Net2Net's "wider" idea with zeroed fan-out).
+#pragma once
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "engine/model_config.h"
+#include "weights_tools/weights_file.h"
+
+namespace yelan::weights {
+
+// `old_mask`: a mask group fitting `from`. `to` must differ from `from` only in
+// mask.width_mult (at least as wide) and in settings that do not shape the mask net.
+// `seed` draws the new channels' weights (MaskNet::init). Throws WeightsError naming
+// `source` when the group does not fit `from` or `to` cannot hold it.
+std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
+                                               const ModelConfig& to, std::uint64_t seed, const std::string& source);
+
+}  // namespace yelan::weights
