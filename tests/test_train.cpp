@@ -353,6 +353,18 @@ TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bi
   const std::string js = yelan::test::slurp(d / "eval.json");
   for (const char* key : {"\"mpjpe_mm\"", "\"frames\": 20", "\"occluded\"", "\"left\"", "\"scenes\": 2"})
     CHECK(yelan::test::contains(js, key));
+  // Pictures of stage 1 against the truth, one per recording; not where stage 1 does not run.
+  const auto pics = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--data", d / "rec", "--seconds", "0.2",
+                                          "--no-floors", "--mask-pictures", d / "pics"});
+  INFO(pics.err);
+  REQUIRE(pics.code == 0);
+  CHECK(yelan::test::contains(pics.out, "wrote 2 pictures of stage 1 against the truth"));
+  for (const char* p : {"ben-dance3-front-high-static", "ana-05_04-left-medium-dynamic-occluded"})
+    CHECK(yelan::test::slurp(d / (std::string("pics/") + p + ".png")).substr(1, 3) == "PNG");
+  const auto no_pics = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--data", d / "rec", "--true-mask",
+                                             "--mask-pictures", d / "pics2"});
+  CHECK(no_pics.code == 2);
+  CHECK(yelan::test::contains(no_pics.err, "--mask-pictures"));
   // Both sources, or a folder without recordings: usage errors naming the problem.
   CHECK(yelan::test::run_cli({"train", "--stage", "pose", "--config", "micro", "--data", d / "rec", "--sim", "train", "-o",
                               d / "x"}).code == 2);

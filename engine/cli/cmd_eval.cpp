@@ -103,7 +103,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
-                "--low-light-dn", "--poses", "--depth-tau"},
+                "--low-light-dn", "--poses", "--depth-tau", "--mask-pictures"},
                {"--true-mask", "--no-floors", "--run", "--unframed"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
@@ -124,6 +124,15 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   }
   train::EvalSpec spec;
   spec.weights = *wpath;
+  if (const auto pics = a.value("--mask-pictures")) {
+    if (a.flag("--run") || a.flag("--true-mask"))
+      throw UsageError("--mask-pictures shows stage 1's masks as eval scores them: not with --run or --true-mask");
+    std::error_code ec;
+    std::filesystem::create_directories(*pics, ec);
+    if (ec || !std::filesystem::is_directory(*pics))
+      throw UsageError("--mask-pictures " + *pics + ": cannot make the folder (" + ec.message() + ")");
+    spec.mask_pictures = *pics;
+  }
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
   spec.seconds_per_scene = a.number_or("--seconds", 1, 0, 3600, true);
   spec.true_mask = a.flag("--true-mask");
@@ -159,6 +168,9 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (data) vet_recordings_up_front(spec.recordings, err);
   const train::EvalResult r = train::evaluate(spec, err);
   out << train::eval_table(r);
+  if (!spec.mask_pictures.empty())
+    out << "wrote " << r.mask_pictures << " pictures of stage 1 against the truth to " << spec.mask_pictures
+        << " (green: both, red: stage 1 alone, blue: the truth alone; the last frame of each recording's middle window)\n";
   if (const auto j = a.value("--json")) camera::write_file_atomically(*j, train::eval_json(r));
   return kOk;
 }

@@ -121,6 +121,7 @@ const std::vector<Command>& commands() {
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
        "                  [--true-mask] [--history 5] [--no-floors] [--unframed] [--low-light-dn DN] [--json OUT] [--threads T]\n"
+       "                  [--mask-pictures DIR]\n"
        "       yelan eval --run --weights W --sim test|--data DIR [--seed N] [--scenes M] [--seconds 1] [--beta B] [--skip 0.5] [--json OUT]\n"
        "                  [--poses CSV] [--depth-tau S]\n"
        "Both networks as deployed on simulated scenes: --sim test draws M scenes of the test\n"
@@ -138,7 +139,9 @@ const std::vector<Command>& commands() {
        "per_view_mean_pose_at_hip) and per view the share of frames where swapping left and\n"
        "right would be better; --json OUT writes mpjpe_mm, pck150, auc, mpjpe_root_mm,\n"
        "frames, by_condition (also per scene), floors, swap_share_by_view, error_split\n"
-       "(image-plane px and depth mm per joint, model and per-view floor), ....\n"
+       "(image-plane px and depth mm per joint, model and per-view floor), ....\n"       "--mask-pictures DIR: one PNG per scene or recording (DIR/NAME.png), the last frame of its\n"
+       "middle window: the TORE in grey, stage 1's mask and the truth (green: both, red: stage 1\n"
+       "alone, blue: the truth alone).\n"
        "--run scores the deployed path instead: yelan run's pipeline on the same scenes (TORE of\n"
        "every event so far, stage 1 with early exit, depth from the body-height prior), each\n"
        "pose against the label at its time; JSON: deployed and paper (true head depth) scores,\n"

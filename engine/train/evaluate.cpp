@@ -17,6 +17,8 @@
 #include "engine/pose_net.h"
 #include "engine/input.h"
 #include "engine/train/batch.h"
+#include "engine/train/mask_picture.h"
+#include "camera/repr/preview_png.h"
 #include "weights_tools/network_io.h"
 #include "weights_tools/weights_file.h"
 
@@ -67,7 +69,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   ErrorSplit split, split_floor;
   // One scene or recording: `windows` windows from `next`, scored under `conditions`.
   auto score = [&](int windows, const std::function<void(sim::SimWindow&)>& next,
-                   const std::map<std::string, std::string>& conditions) {
+                   const std::map<std::string, std::string>& conditions, const std::string& name) {
     for (int k = 0; k < windows; ++k) {
       sim::SimWindow win;
       next(win);
@@ -113,6 +115,14 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         for (int t = 0; t < cfg.window; ++t) {
           const auto& truth = win.frames[std::size_t(t)].mask;
           input::mask_cut(m, t, 0, keep, float(cfg.mask_cut));
+          const auto& frame = win.frames[std::size_t(t)];
+          if (!spec.mask_pictures.empty() && k == windows / 2 && t == cfg.window - 1 && !frame.tore.empty()) {
+            const int sh = win.camera.height, sw = win.camera.width;
+            camera::write_png_rgb(spec.mask_pictures + "/" + name + ".png", sw, sh,
+                                  mask_picture_rgb(frame.tore.data(), int(frame.tore.size() / (2 * std::size_t(sh) * std::size_t(sw))),
+                                                   sh, sw, truth.data(), keep.data(), m.h, m.w, d));
+            ++res.mask_pictures;
+          }
           for (int y = 0; y < m.h; ++y)
             for (int x = 0; x < m.w; ++x) {
               const bool pr = keep[std::size_t(y) * m.w + x] > 0;
@@ -152,7 +162,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
            {"character", s.character},
            {"clothing", sim::clothing_name(ch.clothing)},
            {"occlusion", s.scene.occluders ? "occluded" : "clear"},
-           {"scene", s.name}});
+           {"scene", s.name}},
+          s.name);
     err << "[" << (i + 1) << "/" << total << "] " << s.name << ": MPJPE so far " << std::fixed << std::setprecision(1)
         << all.scores().mpjpe_mm << " mm\n";
   }
@@ -172,7 +183,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
     }
     for (auto it = conditions.begin(); it != conditions.end();) it = it->second.empty() ? conditions.erase(it) : std::next(it);
     if (windows == 0) err << r.path << ": too short for one window of " << cfg.window << " frames; skipped\n";
-    score(windows, [&](sim::SimWindow& w) { stream.next(w); }, conditions);
+    score(windows, [&](sim::SimWindow& w) { stream.next(w); }, conditions, r.name);
     err << "[" << (spec.scenes.size() + i + 1) << "/" << total << "] " << r.name << ": MPJPE so far " << std::fixed
         << std::setprecision(1) << all.scores().mpjpe_mm << " mm\n";
   }

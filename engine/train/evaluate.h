@@ -29,6 +29,10 @@ struct EvalSpec {
   // Simulated scenes frame the dancer (place_in_clip); false: the clip's own placement, as
   // every figure before this option was measured (dancers often partly out of the picture).
   bool framed = true;
+  // Non-empty: a folder for one PNG per scene or recording (its name), the last frame of its
+  // middle window, stage 1's mask against the truth (mask_picture.h); none
+  // where stage 1 does not run (true_mask, or a config whose stage 2 reads no mask).
+  std::string mask_pictures;
 };
 
 struct EvalResult {
@@ -48,6 +52,7 @@ struct EvalResult {
   // Image-plane and depth error of the model and, with floors, of the per-view floor.
   ErrorSplitScores split;
   std::optional<ErrorSplitScores> split_per_view_floor;
+  int mask_pictures = 0;  // PNGs written to EvalSpec::mask_pictures
 };
 
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err);
