@@ -312,6 +312,14 @@ TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 
   INFO(comb.err);
   CHECK(comb.code == 0);
   CHECK(poses("c", "", "c.csv") == pres);
+  // eval --mask-pictures under a model whose stage 2 reads no mask: no stage 1 ran, and it says so.
+  std::filesystem::create_directories(d / "recs");
+  std::filesystem::copy_file(d / "r.yelan.h5", d / "recs/r.yelan.h5");
+  const auto pics = run_cli({"eval", "--weights", d / "presence.h5", "--data", d / "recs", "--seconds", "0.1", "--no-floors",
+                             "--mask-pictures", d / "pics"});
+  INFO(pics.err);
+  CHECK(pics.code == 0);
+  CHECK(contains(pics.err, "--mask-pictures: no picture written"));
   // The role and masked_input must agree; an unknown role is refused, naming the key.
   const auto wrong = variant("wrong", true, "presence");
   CHECK(wrong.code == 2);

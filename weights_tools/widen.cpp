@@ -4,6 +4,7 @@
 
 #include "engine/mask_net.h"
 #include "weights_tools/network_io.h"
+#include "weights_tools/parse_json.h"
 
 namespace yelan::weights {
 
@@ -28,8 +29,21 @@ std::vector<std::int64_t> axis_map(std::int64_t old_n, std::int64_t new_n, bool 
 
 std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
                                                const ModelConfig& to, std::uint64_t seed, const std::string& source) {
-  if (to.channels != from.channels || to.n_masks != from.n_masks || to.height() != from.height() || to.width() != from.width())
-    throw WeightsError(source + ": widening keeps the input and mask.n_masks; config '" + to.name + "' changes them");
+  {  // the input section whole, and the mask section but its width (and role, which shapes nothing)
+    const auto a = parse_json(from.json), b = parse_json(to.json);
+    const auto section = [](const auto& d, const char* key) {
+      auto sec = d.contains(key) ? d.at(key) : std::decay_t<decltype(d)>();
+      if (sec.is_object()) {
+        sec.erase("width_mult");
+        sec.erase("role");
+      }
+      return sec;
+    };
+    for (const char* key : {"input", "mask"})
+      if (section(a, key) != section(b, key))
+        throw WeightsError(source + ": widening changes mask.width_mult alone; config '" + to.name + "' also changes its '" +
+                           key + "' section");
+  }
   if (to.mask_width < from.mask_width)
     throw WeightsError(source + ": config '" + to.name + "' has a narrower mask net (width_mult " + std::to_string(to.mask_width) +
                        " < " + std::to_string(from.mask_width) + "); widening only adds channels");

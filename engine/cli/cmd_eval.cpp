@@ -129,8 +129,8 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
       throw UsageError("--mask-pictures shows stage 1's masks as eval scores them: not with --run or --true-mask");
     std::error_code ec;
     std::filesystem::create_directories(*pics, ec);
-    if (ec || !std::filesystem::is_directory(*pics))
-      throw UsageError("--mask-pictures " + *pics + ": cannot make the folder (" + ec.message() + ")");
+    if (ec) throw UsageError("--mask-pictures " + *pics + ": cannot make the folder (" + ec.message() + ")");
+    if (!std::filesystem::is_directory(*pics)) throw UsageError("--mask-pictures " + *pics + ": exists and is not a folder");
     spec.mask_pictures = *pics;
   }
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
@@ -168,7 +168,10 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (data) vet_recordings_up_front(spec.recordings, err);
   const train::EvalResult r = train::evaluate(spec, err);
   out << train::eval_table(r);
-  if (!spec.mask_pictures.empty())
+  if (!spec.mask_pictures.empty() && r.mask_pictures == 0)
+    err << "yelan: warning: --mask-pictures: no picture written (this model's stage 2 reads no mask, so eval runs no stage 1:\n"
+           "  combine its mask net with a config whose pose.masked_input is true, or use yelan run --viz)\n";
+  else if (!spec.mask_pictures.empty())
     out << "wrote " << r.mask_pictures << " pictures of stage 1 against the truth to " << spec.mask_pictures
         << " (green: both, red: stage 1 alone, blue: the truth alone; the last frame of each recording's middle window)\n";
   if (const auto j = a.value("--json")) camera::write_file_atomically(*j, train::eval_json(r));

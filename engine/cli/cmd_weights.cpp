@@ -198,9 +198,10 @@ int verify(const Args& args, std::ostream& out, std::ostream& err) {
 }
 
 // The mask group of one file and the pose group of another (trained in separate stages)
-// into one model file. The mask net depends on the input and mask sections only, so those
-// must agree; the result keeps the pose file's config (an ablation of the pose net can take
-// the mask net of the full model).
+// into one model file. Both nets read the same input, so the input sections must agree; the
+// result keeps the pose file's config (an ablation of the pose net can take the mask net of
+// the full model), whose mask section must then describe the mask net, or --config's, which
+// must describe both (a mask net of another width joins a pose net that way).
 int combine(const Args& a, std::ostream& out) {
   a.expect_positionals(0, 0);
   const auto m = a.value("--mask"), p = a.value("--pose"), o = a.value("-o");

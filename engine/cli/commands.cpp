@@ -139,7 +139,8 @@ const std::vector<Command>& commands() {
        "per_view_mean_pose_at_hip) and per view the share of frames where swapping left and\n"
        "right would be better; --json OUT writes mpjpe_mm, pck150, auc, mpjpe_root_mm,\n"
        "frames, by_condition (also per scene), floors, swap_share_by_view, error_split\n"
-       "(image-plane px and depth mm per joint, model and per-view floor), ....\n"       "--mask-pictures DIR: one PNG per scene or recording (DIR/NAME.png), the last frame of its\n"
+       "(image-plane px and depth mm per joint, model and per-view floor), ....\n"
+       "--mask-pictures DIR: one PNG per scene or recording (DIR/NAME.png), the last frame of its\n"
        "middle window: the TORE in grey, stage 1's mask and the truth (green: both, red: stage 1\n"
        "alone, blue: the truth alone).\n"
        "--run scores the deployed path instead: yelan run's pipeline on the same scenes (TORE of\n"
@@ -294,8 +295,8 @@ const std::vector<Command>& commands() {
        "manifest: weights_tools/configs/NAME.manifest.json, or FILE.manifest.json beside a\n"
        "config FILE). Bad or mismatched files exit 2, one line per problem.\n"
        "combine: the mask group of A and the pose group of B (stages trained apart) in one file;\n"
-       "--config: the file's config instead of B's (inference settings such as pose.crop_margin;\n"
-       "the tensors must fit it).\n",
+       "--config: the file's config instead of B's (inference settings such as pose.crop_margin,\n"
+       "or a mask net of another width than B's config says; the tensors must fit it).\n",
        cmd_weights, "HDF5 weights (issue 4)"},
   };
   return table;

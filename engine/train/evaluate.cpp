@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <set>
 #include <optional>
 #include <functional>
 #include <iomanip>
@@ -66,10 +67,11 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   std::optional<Floors> floors;
   if (spec.floors) floors.emplace(training_floor_stats(240, 25, spec.framed));
   SwapShare swaps;
+  std::set<std::string> picture_names;
   ErrorSplit split, split_floor;
   // One scene or recording: `windows` windows from `next`, scored under `conditions`.
   auto score = [&](int windows, const std::function<void(sim::SimWindow&)>& next,
-                   const std::map<std::string, std::string>& conditions, const std::string& name) {
+                   const std::map<std::string, std::string>& conditions, const std::string& scene_name) {
     for (int k = 0; k < windows; ++k) {
       sim::SimWindow win;
       next(win);
@@ -118,7 +120,11 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
           const auto& frame = win.frames[std::size_t(t)];
           if (!spec.mask_pictures.empty() && k == windows / 2 && t == cfg.window - 1 && !frame.tore.empty()) {
             const int sh = win.camera.height, sw = win.camera.width;
-            camera::write_png_rgb(spec.mask_pictures + "/" + name + ".png", sw, sh,
+            // A scene drawn twice (--sim test with more than 48 scenes) gets its index too.
+            std::string file = scene_name;
+            if (!picture_names.insert(file).second) file += "-" + std::to_string(picture_names.size());
+            picture_names.insert(file);
+            camera::write_png_rgb(spec.mask_pictures + "/" + file + ".png", sw, sh,
                                   mask_picture_rgb(frame.tore.data(), int(frame.tore.size() / (2 * std::size_t(sh) * std::size_t(sw))),
                                                    sh, sw, truth.data(), keep.data(), m.h, m.w, d));
             ++res.mask_pictures;

@@ -51,6 +51,47 @@ std::vector<float> outputs(MaskNet& net, const layers::Act& x) {
 
 }  // namespace
 
+namespace {
+
+// Outputs of the narrow net and of its widened copy on the same input, in both BN modes.
+void check_same_outputs(Net& a, Net& b, const layers::Act& x) {
+  for (const bool training : {false, true}) {
+    INFO("training mode " << training);
+    a.net.set_training(training);
+    b.net.set_training(training);
+    const std::vector<float> ya = outputs(a.net, x), yb = outputs(b.net, x);
+    REQUIRE(ya.size() == yb.size());
+    double worst = 0, scale = 0;
+    for (std::size_t i = 0; i < ya.size(); ++i) {
+      worst = std::max(worst, double(std::abs(ya[i] - yb[i])));
+      scale = std::max(scale, double(std::abs(ya[i])));
+    }
+    CHECK(scale > 0.1);
+    CHECK(worst <= 1e-5 * scale);  // the same up to rounding (the zero terms change the sums' order)
+  }
+}
+
+void load_widened(Net& b, const std::map<std::string, weights::Tensor>& group) {
+  weights::Weights w;
+  w.groups["mask"] = group;
+  weights::load_group(w, "mask", b.params, "widened");
+  b.net.weights_changed();
+}
+
+}  // namespace
+
+TEST_CASE("widening 16 to 24 channels (whole 16-lane blocks, as the shipped net) keeps the outputs", "[weights][widen]") {
+  const ModelConfig narrow = tiny_mask(0.25), wide = tiny_mask(0.375);
+  REQUIRE(narrow.unet_width(0) == 16);
+  Net a(narrow);
+  a.net.init(2);
+  weights::randomise_batchnorm(a.params, 3);
+  Net b(wide);
+  load_widened(b, weights::widen_mask_group(weights::group_of(a.params), narrow, wide, 4, "old.h5"));
+  test::Owned x(2, narrow.channels, narrow.height(), narrow.width(), 5);
+  check_same_outputs(a, b, x.act);
+}
+
 TEST_CASE("widening the mask net keeps its outputs and leaves the new channels free to learn", "[weights][widen]") {
   const ModelConfig narrow = load_model_config("tiny"), wide = tiny_mask(0.1875);  // 8 -> 12 channels at the top
   REQUIRE(wide.unet_width(0) == 12);
@@ -61,25 +102,9 @@ TEST_CASE("widening the mask net keeps its outputs and leaves the new channels f
   const auto group = weights::widen_mask_group(old_group, narrow, wide, 7, "old.h5");
 
   Net b(wide);
-  weights::Weights w;
-  w.groups["mask"] = group;
-  weights::load_group(w, "mask", b.params, "widened");
-  b.net.weights_changed();
+  load_widened(b, group);
   test::Owned x(2, narrow.channels, narrow.height(), narrow.width(), 9);
-  for (const bool training : {false, true}) {
-    INFO("training mode " << training);
-    a.net.set_training(training);
-    b.net.set_training(training);
-    const std::vector<float> ya = outputs(a.net, x.act), yb = outputs(b.net, x.act);
-    REQUIRE(ya.size() == yb.size());
-    double worst = 0, scale = 0;
-    for (std::size_t i = 0; i < ya.size(); ++i) {
-      worst = std::max(worst, double(std::abs(ya[i] - yb[i])));
-      scale = std::max(scale, double(std::abs(ya[i])));
-    }
-    CHECK(scale > 0.1);
-    CHECK(worst <= 1e-5 * scale);
-  }
+  check_same_outputs(a, b, x.act);
 
   // A new channel's own weights are drawn; what reads it into an old channel is zero; the old
   // weights sit where the old net had them, the concatenated input's second half included.
@@ -125,8 +150,11 @@ TEST_CASE("widening refuses a narrower net, other outputs and a group that is no
     }
   };
   fails(narrow, tiny_mask(0.0625), "narrower");
-  fails(narrow, tiny_mask(0.25, 5), "n_masks");
+  fails(narrow, tiny_mask(0.25, 5), "'mask' section");  // n_masks
   fails(tiny_mask(0.25), tiny_mask(0.375), "shape");  // the group is 0.125's
+  ModelConfig other_input = tiny_mask(0.25);
+  other_input.json.replace(other_input.json.find("\"window\": 3"), 11, "\"window\": 4");
+  fails(narrow, other_input, "'input' section");
 }
 
 TEST_CASE("yelan weights widen: a file that loads under the wider config and keeps the pose group", "[weights][widen][cli]") {
