@@ -275,12 +275,8 @@ int weights_init(const std::vector<std::string>& argv, std::ostream& out) {
   if (!name || !o) throw UsageError("weights init needs --config NAME|FILE --seed N -o W.h5");
   check_output("-o", *o, {*name});
   const int seed = a.int_value_or("--seed", 0, 0, 2147483647);
-  ModelConfig cfg;
-  try {
-    cfg = load_model_config(*name);
-  } catch (const ConfigError& e) {
-    throw UsageError(e.what());
-  }
+  // A bad config's ConfigError reaches cli.cpp's handler: exit 2 with its message.
+  const ModelConfig cfg = load_model_config(*name);
   MaskNet mask(cfg);
   PoseNet pose(cfg);
   mask.init(std::uint64_t(seed) * 2 + 1);

@@ -255,12 +255,8 @@ int widen(const Args& a, std::ostream& out) {
   if (!in || !name || !o) throw UsageError("weights widen needs --weights OLD.h5 --config NAME|FILE -o OUT.h5 [--seed N]");
   check_output("-o", *o, {*in, *name});
   const int seed = a.int_value_or("--seed", 0, 0, 2147483647);
-  ModelConfig to;
-  try {
-    to = load_model_config(*name);
-  } catch (const ConfigError& e) {
-    throw UsageError(e.what());
-  }
+  // A bad config's ConfigError reaches cli.cpp's handler: exit 2 with its message.
+  const ModelConfig to = load_model_config(*name);
   weights::Weights w = weights::load_weights(*in);
   const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
   w.groups["mask"] = weights::widen_mask_group(w.groups["mask"], from, to, std::uint64_t(seed) * 2 + 1, *in);
