@@ -181,6 +181,9 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   CHECK(run("none", "2", {"--resume"}).code != 0);
   CHECK(yelan::test::run_cli({"train", "--stage", "legs", "--config", "micro", "--sim", "train", "-o", d / "x"}).code == 2);
   CHECK(yelan::test::run_cli({"train", "--config", "micro"}).code == 2);
+  const auto bad_cfg = yelan::test::run_cli({"train", "--stage", "mask", "--config", "no-such-config", "--sim", "train", "-o", d / "x"});
+  CHECK(bad_cfg.code == 2);
+  CHECK(yelan::test::contains(bad_cfg.err, "no-such-config"));
 }
 
 TEST_CASE("train: --steps fewer than --epoch-steps still validates at the end and writes best.h5", "[train][cli]") {
@@ -576,4 +579,8 @@ TEST_CASE("train: eval --data says stage 1's IoU on the recordings with a dancer
   REQUIRE(people.contains("nobody"));
   CHECK(people.at("nobody").get<double>() == 0);
   CHECK(j.at("mask_iou").get<double>() < people.at("dancer").get<double>());
+  // The IoU off the true outline's edge beside it, per condition too.
+  CHECK(yelan::test::contains(ev.out, "; off the true outline's edge "));
+  REQUIRE(j.at("mask_iou_off_edge").is_number());
+  CHECK(j.at("mask_iou_off_edge_by_condition").at("people").contains("dancer"));
 }

@@ -67,11 +67,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   train::TrainSpec spec;
   spec.stage = *stage;
   if (spec.stage != "mask" && spec.stage != "pose") throw UsageError("--stage must be mask or pose");
-  try {
-    spec.cfg = load_model_config(*config);
-  } catch (const ConfigError& e) {
-    throw UsageError(e.what());
-  }
+  spec.cfg = load_model_config(*config);  // a bad config: cli.cpp's handler, exit 2
   if (const auto t = a.value("--threads")) {
     const auto n = parse_thread_count(*t);
     if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");

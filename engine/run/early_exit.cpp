@@ -7,6 +7,7 @@
 
 #include "camera/sim/recording_windows.h"
 #include "engine/run/pipeline.h"
+#include "engine/train/mask_overlap.h"
 
 namespace yelan::run {
 
@@ -55,7 +56,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
   for (const double beta : betas) {
     BetaPoint pt;
     pt.beta = beta;
-    double inter = 0, uni = 0;
+    train::MaskOverlap overlap;
     std::uint64_t mask_runs = 0, with_events = 0;
     double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0, sad = 0;
     for (const std::string& path : recordings) {
@@ -88,20 +89,14 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
             ++pt.scored_masks;
           }
         }
-        for (int y = 0; y < mh; ++y)
-          for (int x = 0; x < mw; ++x) {
-            const bool pr = pm[std::size_t(y) * mw + x] > 0;
-            const bool tr = truth[std::size_t(y * d + d / 2) * W + x * d + d / 2] != 0;
-            inter += pr && tr;
-            uni += pr || tr;
-          }
+        train::add_mask_overlap(overlap, truth, W, pm.data(), mh, mw, d);
         ++pt.ticks;
       };
       run_file(pipe, path, tm.end, score);
       mask_runs += pipe.stats().mask_runs;
       with_events += pipe.stats().ticks - pipe.stats().stale;
     }
-    pt.iou = uni > 0 ? inter / uni : 0;
+    pt.iou = overlap.iou();
     if (pt.scored_masks > 1) {
       const double n = double(pt.scored_masks);
       const double cov = sxy / n - sx / n * sy / n, vx = sxx / n - sx / n * sx / n, vy = syy / n - sy / n * sy / n;

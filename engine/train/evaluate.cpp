@@ -18,6 +18,7 @@
 #include "engine/pose_net.h"
 #include "engine/input.h"
 #include "engine/train/batch.h"
+#include "engine/train/mask_overlap.h"
 #include "engine/train/mask_picture.h"
 #include "camera/repr/preview_png.h"
 #include "weights_tools/network_io.h"
@@ -61,8 +62,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   res.config = cfg.name;
   PoseMetrics all, oracle;
   std::map<std::string, std::map<std::string, PoseMetrics>> cond;
-  double inter = 0, uni = 0;
-  std::map<std::string, std::map<std::string, std::pair<double, double>>> cond_iou;  // inter, union
+  MaskOverlap overlap;
+  std::map<std::string, std::map<std::string, MaskOverlap>> cond_iou;
   BatchBuilder builder(cfg, 1, spec.true_mask ? MaskSource::truth : MaskSource::net);
   std::optional<Floors> floors;
   if (spec.floors) floors.emplace(training_floor_stats(240, 25, spec.framed));
@@ -113,7 +114,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
         const layers::Act& m = mask.masks();
         const int d = cfg.downscale;
         std::vector<float> keep;
-        const double inter0 = inter, uni0 = uni;
+        const MaskOverlap before = overlap;
         for (int t = 0; t < cfg.window; ++t) {
           const auto& truth = win.frames[std::size_t(t)].mask;
           input::mask_cut(m, t, 0, keep, float(cfg.mask_cut));
@@ -129,19 +130,9 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
                                                    sh, sw, truth.data(), keep.data(), m.h, m.w, d));
             ++res.mask_pictures;
           }
-          for (int y = 0; y < m.h; ++y)
-            for (int x = 0; x < m.w; ++x) {
-              const bool pr = keep[std::size_t(y) * m.w + x] > 0;
-              const bool tr = truth[std::size_t(y * d + d / 2) * win.camera.width + x * d + d / 2] != 0;
-              inter += pr && tr;
-              uni += pr || tr;
-            }
+          add_mask_overlap(overlap, truth.data(), win.camera.width, keep.data(), m.h, m.w, d);
         }
-        for (const auto& [name, value] : conditions) {
-          auto& [ci, cu] = cond_iou[name][value];
-          ci += inter - inter0;
-          cu += uni - uni0;
-        }
+        for (const auto& [name, value] : conditions) cond_iou[name][value] += overlap - before;
       }
     }
   };
@@ -195,13 +186,17 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   }
   res.all = all.scores();
   res.swap_oracle = oracle.scores();
-  res.mask_iou = spec.true_mask || !cfg.masked_input ? -1 : uni > 0 ? inter / uni : 0;
+  const bool no_stage1 = spec.true_mask || !cfg.masked_input;
+  res.mask_iou = no_stage1 ? -1 : overlap.iou();
+  res.mask_iou_off_edge = no_stage1 ? -1 : overlap.iou_off_edge();
   for (const auto& [name, values] : cond)
     for (const auto& [value, m] : values)
       if (m.scores().frames > 0) res.by_condition[name][value] = m.scores();  // empty scenes score no frame
   for (const auto& [name, values] : cond_iou)
-    for (const auto& [value, iu] : values)
-      if (iu.second > 0) res.mask_iou_by_condition[name][value] = iu.first / iu.second;
+    for (const auto& [value, iu] : values) {
+      if (iu.uni > 0) res.mask_iou_by_condition[name][value] = iu.iou();
+      if (iu.uni_off_edge > 0) res.mask_iou_off_edge_by_condition[name][value] = iu.iou_off_edge();
+    }
   res.scenes = total;
   res.split = split.scores();
   if (floors) {
@@ -271,6 +266,11 @@ std::string eval_json(const EvalResult& r) {
   for (const auto& [name, values] : r.mask_iou_by_condition)
     for (const auto& [value, iou] : values) ic[name][value] = iou;
   j["mask_iou_by_condition"] = ic;
+  j["mask_iou_off_edge"] = r.mask_iou_off_edge >= 0 ? nlohmann::ordered_json(r.mask_iou_off_edge) : nlohmann::ordered_json(nullptr);
+  nlohmann::ordered_json ie = nlohmann::ordered_json::object();
+  for (const auto& [name, values] : r.mask_iou_off_edge_by_condition)
+    for (const auto& [value, iou] : values) ie[name][value] = iou;
+  j["mask_iou_off_edge_by_condition"] = ie;
   return j.dump(2) + "\n";
 }
 
@@ -287,6 +287,12 @@ std::string eval_table(const EvalResult& r) {
   if (const auto p = r.mask_iou_by_condition.find("people"); r.mask_iou >= 0 && p != r.mask_iou_by_condition.end())
     if (const auto dn = p->second.find("dancer"); dn != p->second.end() && p->second.count("nobody"))
       o << " (recordings with a dancer alone: " << std::to_string(dn->second).substr(0, 5) << ")";
+  if (r.mask_iou_off_edge >= 0) {
+    o << "; off the true outline's edge " << std::to_string(r.mask_iou_off_edge).substr(0, 5);
+    if (const auto p = r.mask_iou_off_edge_by_condition.find("people"); p != r.mask_iou_off_edge_by_condition.end())
+      if (const auto dn = p->second.find("dancer"); dn != p->second.end() && p->second.count("nobody"))
+        o << " (with a dancer: " << std::to_string(dn->second).substr(0, 5) << ")";
+  }
   o << "\n";
   o << std::setprecision(1) << "per joint (mm):";
   for (int i = 0; i < kJoints; ++i) {

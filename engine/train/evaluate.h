@@ -42,6 +42,10 @@ struct EvalResult {
   std::map<std::string, std::map<std::string, PoseScores>> by_condition;
   // the same conditions' mask IoU (stage 1 against the true mask); empty with true masks
   std::map<std::string, std::map<std::string, double>> mask_iou_by_condition;
+  // The same off the true silhouette's edge (engine/train/mask_overlap.h): what is left when a
+  // cell either way at the outline is forgiven.
+  double mask_iou_off_edge = 0;
+  std::map<std::string, std::map<std::string, double>> mask_iou_off_edge_by_condition;
   std::string config;
   std::uint64_t scenes = 0;
   std::map<std::string, PoseScores> floors;         // predictor name -> scores, same frames
