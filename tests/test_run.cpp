@@ -93,7 +93,7 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--crop-margin", "-3"}).code == 2);
 }
 
-TEST_CASE("run: presence is the calibrated probability of the mask's share, and no person writes no joints",
+TEST_CASE("run: presence is the calibrated probability of the mask's share, no person writes no joints, and an empty room is looked at again every run.idle_recheck_s",
           "[run][cli]") {
   using yelan::run::presence_probability;
   // P rises with the share, 0.5 where a * ln(s + 0.001) + b = 0.
@@ -130,6 +130,29 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, and 
     CHECK(rows[i][42] == "0");
     CHECK(rows[i][41] == "1");  // a stored mask that says nobody is not reused: stage 1 looks again
   }
+  // --idle-recheck (or the config's run.idle_recheck_s): stage 1, having seen nobody, looks
+  // again once 60 ms have passed, every third tick at 50 per second; --no-early-exit still
+  // runs it on every tick; a setting outside 0..1 s is refused.
+  const auto mask_ran = [&](const std::string& csv) {
+    std::vector<int> ran;
+    for (const auto& row : csv_rows(slurp(d / csv))) if (row.size() == 45 && row[0] != "t_us") ran.push_back(std::stoi(row[41]));
+    return ran;
+  };
+  REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "i.csv", "--idle-recheck", "0.06"}).code == 0);
+  const std::vector<int> idle = mask_ran("i.csv");
+  REQUIRE(idle.size() == rows.size() - 1);
+  for (std::size_t i = 0; i < idle.size(); ++i) CHECK(idle[i] == (i % 3 == 0 ? 1 : 0));
+  std::ofstream(d / "idle.json") << cfg.substr(0, brace) << ", \"run\": {\"idle_recheck_s\": 0.06, \"presence\": {\"a\": 0, \"b\": -30}}}\n";
+  REQUIRE(run_cli({"weights", "init", "--config", d / "idle.json", "--seed", "2", "-o", d / "idle.h5"}).code == 0);
+  REQUIRE(run_cli({"run", "--weights", d / "idle.h5", d / "r.yelan.h5", "--out", d / "c.csv"}).code == 0);
+  CHECK(mask_ran("c.csv") == idle);
+  REQUIRE(run_cli({"run", "--weights", d / "idle.h5", d / "r.yelan.h5", "--out", d / "e.csv", "--no-early-exit"}).code == 0);
+  CHECK(mask_ran("e.csv") == std::vector<int>(idle.size(), 1));
+  CHECK(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--idle-recheck", "2"}).code == 2);
+  std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"idle_recheck_s\": -1}}\n";
+  const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "--seed", "2", "-o", d / "bad.h5"});
+  CHECK(bad.code == 2);
+  CHECK(contains(bad.err, "run.idle_recheck_s must lie in 0..1"));
   REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "n.json"}).code == 0);
   CHECK(contains(slurp(d / "n.json"), "\"joints_mm\": null"));
   CHECK(contains(slurp(d / "n.json"), "\"person\": false"));

@@ -115,6 +115,7 @@ struct PosePipeline::Impl {
   // stage 1
   bool have_masks = false;
   std::int64_t mask_t = 0;
+  std::int64_t idle_recheck_us = 0;
   std::vector<std::vector<float>> masks;  // N binarised masks, H x W
   std::vector<float> scores;
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
@@ -167,6 +168,8 @@ struct PosePipeline::Impl {
     if (o.depth_tau_s) nets.cfg.depth_tau_s = *o.depth_tau_s;
     depth_smoother = DepthSmoother(nets.cfg.depth_tau_s);
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
+    if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
+    idle_recheck_us = std::llround(nets.cfg.idle_recheck_s * 1e6);
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
   }
@@ -285,13 +288,17 @@ struct PosePipeline::Impl {
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
     t0 = Clock::now();
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
-    // A stored mask that says nobody is there is not reused, however sure its score: a net
-    // that saw an empty room is confidently wrong about the next 300 ms once someone walks in
-    // (a dancer was missed on the first 16 ticks of the demo). Nor is a future mask whose run
-    // saw nobody in the current frame: it predicts someone the net did not see.
-    const bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || scores[std::size_t(idx)] < beta ||
-                                                presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold ||
-                                                presence_of(cues[0].share) < opt.presence_threshold);
+    // A stored mask that says nobody is there is not reused for long, however sure its score:
+    // a net that saw an empty room is confidently wrong about the next 300 ms once someone
+    // walks in (a dancer was missed on the first 16 ticks of the demo). Nor is a future mask
+    // whose run saw nobody in the current frame: it predicts someone the net did not see.
+    // Such a run is redone once run.idle_recheck_s has passed (0: on the next tick).
+    bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || beta > 1);
+    if (cfg.runs_stage1() && !run_mask) {
+      const bool saw_nobody = presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold ||
+                              presence_of(cues[0].share) < opt.presence_threshold;
+      run_mask = saw_nobody ? T - mask_t >= idle_recheck_us : scores[std::size_t(idx)] < beta;
+    }
     int use = idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);

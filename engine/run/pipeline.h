@@ -45,6 +45,8 @@ struct RunOptions {
   std::optional<double> depth_tau_s;
   // Whether the depth prior counts the forearms, instead of the model's run.depth_forearms.
   std::optional<bool> depth_forearms;
+  // Seconds between stage 1's runs while it sees nobody, instead of the model's run.idle_recheck_s.
+  std::optional<double> idle_recheck_s;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
