@@ -149,10 +149,10 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, no p
   REQUIRE(run_cli({"run", "--weights", d / "idle.h5", d / "r.yelan.h5", "--out", d / "e.csv", "--no-early-exit"}).code == 0);
   CHECK(mask_ran("e.csv") == std::vector<int>(idle.size(), 1));
   CHECK(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--idle-recheck", "2"}).code == 2);
-  std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"idle_recheck_s\": -1}}\n";
-  const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "--seed", "2", "-o", d / "bad.h5"});
-  CHECK(bad.code == 2);
-  CHECK(contains(bad.err, "run.idle_recheck_s must lie in 0..1"));
+  std::ofstream(d / "bad-idle.json") << cfg.substr(0, brace) << ", \"run\": {\"idle_recheck_s\": -1}}\n";
+  const auto bad_idle = run_cli({"weights", "init", "--config", d / "bad-idle.json", "--seed", "2", "-o", d / "bad-idle.h5"});
+  CHECK(bad_idle.code == 2);
+  CHECK(contains(bad_idle.err, "run.idle_recheck_s must lie in 0..1"));
   REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "n.json"}).code == 0);
   CHECK(contains(slurp(d / "n.json"), "\"joints_mm\": null"));
   CHECK(contains(slurp(d / "n.json"), "\"person\": false"));
