@@ -52,8 +52,9 @@ struct ModelConfig {
   //   cut that keeps the dancer for a masked stage 2; `yelan calibrate --choose-mask-cut`
   //   picks the one of best IoU against the true masks).
   //   run.idle_recheck_s (optional, default 0): while stage 1's last run saw nobody, it runs
-  //   again once this many seconds have passed (0: on every tick), so an empty room costs
-  //   a fraction of stage 1 while a dancer who walks in is seen at most this much later.
+  //   again once this many seconds have passed (0: on every tick; at most the future masks'
+  //   span, n_masks / 50 s), so an empty room costs a fraction of stage 1 while a dancer who
+  //   walks in is seen at most this much later.
   double run_beta = 0.99;
   double mask_cut = 0.1;
   double depth_scale = 1;

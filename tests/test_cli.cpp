@@ -325,8 +325,9 @@ TEST_CASE("Ctrl-C during run on a file writes every pose computed so far, and it
 
 TEST_CASE("every shipped model verifies against its config's manifest", "[cli]") {
   const std::string models = std::string(YELAN_SOURCE_DIR) + "/models/";
-  // The default's stage 1 is at width 0.375 since 2026-11-29 (mask-s15): the configs it was
-  // trained and is shipped under.
+  // The default's stage 1 is at width 0.375 since 2026-11-29 (mask-s15): its networks' config,
+  // by name and as the file it was trained under (the shipped -presence config differs only
+  // in roles and run settings, which a manifest does not hold).
   const std::string configs = std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/";
   for (const auto& [file, config] : {std::pair<std::string, std::string>{"default.h5", "small-mask0.375-pose0.125"},
                                      {"default.h5", configs + "small-mask0.375-pose0.125.json"},

@@ -131,18 +131,19 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, no p
     CHECK(rows[i][41] == "1");  // a stored mask that says nobody is not reused: stage 1 looks again
   }
   // --idle-recheck (or the config's run.idle_recheck_s): stage 1, having seen nobody, looks
-  // again once 60 ms have passed, every third tick at 50 per second; --no-early-exit still
-  // runs it on every tick; a setting outside 0..1 s is refused.
+  // again once 40 ms have passed, every second tick at 50 per second (micro's 3 future masks
+  // would end the reuse at the third tick anyway); --no-early-exit still runs it on every
+  // tick; a setting outside 0..1 s is refused.
   const auto mask_ran = [&](const std::string& csv) {
     std::vector<int> ran;
     for (const auto& row : csv_rows(slurp(d / csv))) if (row.size() == 45 && row[0] != "t_us") ran.push_back(std::stoi(row[41]));
     return ran;
   };
-  REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "i.csv", "--idle-recheck", "0.06"}).code == 0);
+  REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "i.csv", "--idle-recheck", "0.04"}).code == 0);
   const std::vector<int> idle = mask_ran("i.csv");
   REQUIRE(idle.size() == rows.size() - 1);
-  for (std::size_t i = 0; i < idle.size(); ++i) CHECK(idle[i] == (i % 3 == 0 ? 1 : 0));
-  std::ofstream(d / "idle.json") << cfg.substr(0, brace) << ", \"run\": {\"idle_recheck_s\": 0.06, \"presence\": {\"a\": 0, \"b\": -30}}}\n";
+  for (std::size_t i = 0; i < idle.size(); ++i) CHECK(idle[i] == (i % 2 == 0 ? 1 : 0));
+  std::ofstream(d / "idle.json") << cfg.substr(0, brace) << ", \"run\": {\"idle_recheck_s\": 0.04, \"presence\": {\"a\": 0, \"b\": -30}}}\n";
   REQUIRE(run_cli({"weights", "init", "--config", d / "idle.json", "--seed", "2", "-o", d / "idle.h5"}).code == 0);
   REQUIRE(run_cli({"run", "--weights", d / "idle.h5", d / "r.yelan.h5", "--out", d / "c.csv"}).code == 0);
   CHECK(mask_ran("c.csv") == idle);
@@ -165,6 +166,9 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, no p
     CHECK_FALSE(arows[i][1].empty());
     CHECK(arows[i][42] == "1");
   }
+  // Where stage 1 sees someone the idle recheck changes nothing: early exit as before.
+  REQUIRE(run_cli({"run", "--weights", d / "always.h5", d / "r.yelan.h5", "--out", d / "ai.csv", "--beta", "0.5", "--idle-recheck", "0.04"}).code == 0);
+  CHECK(mask_ran("ai.csv") == mask_ran("a.csv"));
   // A calibration out of range is refused by the config's checks, naming the key.
   std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"beta\": 2.5}}\n";
   const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});

@@ -64,7 +64,7 @@ SimSpec preset_spec(const std::string& name) {
   SimSpec spec;
   spec.name = name;
   // A still camera has no suffix: "still" is not one.
-  SceneConfig::CameraMotion motion;
+  SceneConfig::CameraMotion motion = SceneConfig::still;
   while (!parts.empty() && (parts.back() == "occluded" || parts.back() == "flicker" || parts.back() == "empty" ||
                             parts.back() == "clutter" ||
                             (parse_camera_motion(parts.back(), motion) && motion != SceneConfig::still))) {

@@ -288,18 +288,23 @@ struct PosePipeline::Impl {
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
     t0 = Clock::now();
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
-    // A stored mask that says nobody is there is not reused for long, however sure its score:
+    // A stored future mask that says nobody is there is not reused, however sure its score:
     // a net that saw an empty room is confidently wrong about the next 300 ms once someone
-    // walks in (a dancer was missed on the first 16 ticks of the demo). Nor is a future mask
-    // whose run saw nobody in the current frame: it predicts someone the net did not see.
-    // Such a run is redone once run.idle_recheck_s has passed (0: on the next tick).
+    // walks in (a dancer was missed on the first 16 ticks of the demo). A run that saw nobody
+    // in the current frame is redone once run.idle_recheck_s has passed (0: on the next tick;
+    // at most the future masks' span), its current mask kept meanwhile: its future masks
+    // would predict someone the net did not see.
     bool run_mask = cfg.runs_stage1() && (!have_masks || idx < 0 || idx >= cfg.n_masks || beta > 1);
+    bool hold_current = false;
     if (cfg.runs_stage1() && !run_mask) {
-      const bool saw_nobody = presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold ||
-                              presence_of(cues[0].share) < opt.presence_threshold;
-      run_mask = saw_nobody ? T - mask_t >= idle_recheck_us : scores[std::size_t(idx)] < beta;
+      if (presence_of(cues[0].share) < opt.presence_threshold) {
+        run_mask = T - mask_t >= idle_recheck_us;
+        hold_current = !run_mask;
+      } else {
+        run_mask = scores[std::size_t(idx)] < beta || presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold;
+      }
     }
-    int use = idx;
+    int use = hold_current ? 0 : idx;
     if (run_mask) {
       nets.mask.forward(unmasked.act);
       const layers::Act& m = nets.mask.masks();
