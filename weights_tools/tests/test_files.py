@@ -81,7 +81,7 @@ class WeightsChecksum(Scratch):
             key = next(k for k, ds in p["pose"].items() if ds.size >= 64)
             at = p["pose"][key].id.get_offset()  # contiguous: the first data byte in the file
         self.assertIsNotNone(at)
-        r = _yelan("weights", "verify", out, "--config", "small-pose0.125")
+        r = _yelan("weights", "verify", out, "--config", "small-mask0.375-pose0.125")
         self.assertEqual(r.returncode, 0, r.stderr)
         # A byte flipped inside a tensor of the Python-written file: the loader names it.
         with open(out, "r+b") as f:
