@@ -262,15 +262,15 @@ std::string eval_json(const EvalResult& r) {
   for (const auto& [name, values] : r.by_condition)
     for (const auto& [value, s] : values) bc[name][value] = scores_json(s);
   j["by_condition"] = bc;
-  nlohmann::ordered_json ic = nlohmann::ordered_json::object();
-  for (const auto& [name, values] : r.mask_iou_by_condition)
-    for (const auto& [value, iou] : values) ic[name][value] = iou;
-  j["mask_iou_by_condition"] = ic;
+  const auto by_condition = [](const std::map<std::string, std::map<std::string, double>>& m) {
+    nlohmann::ordered_json o = nlohmann::ordered_json::object();
+    for (const auto& [name, values] : m)
+      for (const auto& [value, iou] : values) o[name][value] = iou;
+    return o;
+  };
+  j["mask_iou_by_condition"] = by_condition(r.mask_iou_by_condition);
   j["mask_iou_off_edge"] = r.mask_iou_off_edge >= 0 ? nlohmann::ordered_json(r.mask_iou_off_edge) : nlohmann::ordered_json(nullptr);
-  nlohmann::ordered_json ie = nlohmann::ordered_json::object();
-  for (const auto& [name, values] : r.mask_iou_off_edge_by_condition)
-    for (const auto& [value, iou] : values) ie[name][value] = iou;
-  j["mask_iou_off_edge_by_condition"] = ie;
+  j["mask_iou_off_edge_by_condition"] = by_condition(r.mask_iou_off_edge_by_condition);
   return j.dump(2) + "\n";
 }
 
