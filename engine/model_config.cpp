@@ -85,6 +85,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.masked_input = get_bool_or(p, where + ".pose", "masked_input", true);
   c.mask_role = m.contains("role") ? get_str(m, where + ".mask", "role") : c.masked_input ? "mask" : "none";
   c.crop_margin = p.contains("crop_margin") ? get_int(p, where + ".pose", "crop_margin") : 0;
+  c.head_stride = p.contains("head_stride") ? get_int(p, where + ".pose", "head_stride") : 8;
   c.representation = i.contains("representation") ? get_str(i, where + ".input", "representation") : "tore";
   if (d.contains("run")) {
     const json& r = section(d, "run", where);
@@ -107,6 +108,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.downscale >= 1, "input.downscale must be >= 1"},
       {c.window >= 1, "input.window must be >= 1"},
       {c.crop_margin >= 0, "pose.crop_margin must be >= 0"},
+      {c.head_stride == 8 || c.head_stride == 4, "pose.head_stride must be 8 or 4"},
       {c.presence_tau_s >= 0 && c.presence_tau_s <= 60, "run.presence.tau_s must lie in 0..60 (seconds)"},
       {c.depth_tau_s >= 0 && c.depth_tau_s <= 60, "run.depth_tau_s must lie in 0..60 (seconds)"},
       {c.idle_recheck_s >= 0 && c.idle_recheck_s <= 1, "run.idle_recheck_s must lie in 0..1 (seconds)"},

@@ -31,6 +31,11 @@ struct ModelConfig {
   // pose.crop_margin > 0: at inference, stage 2's ResNet head runs only on the mask's
   // bounding box grown by this many input pixels (PoseNet::forward_cropped); 0: whole frame
   int crop_margin = 0;
+  // pose.head_stride: the ResNet head's total stride, 8 (torchvision's: layer2 halves) or 4
+  // (layer2 keeps layer1's resolution): the heatmaps are then twice as fine in each axis
+  // (33 x 44 at input downscale 2), at about three times stage 2's multiply-adds. A body
+  // filling the frame spans 16 heatmap cells at stride 8, 106 mm a cell.
+  int head_stride = 8;
   // input.representation: "tore" (2K = channels TORE planes) or "counts" (2 channels: events
   // of each polarity in the last frame period, log(1 + n); the constant-time-frame baseline)
   std::string representation = "tore";

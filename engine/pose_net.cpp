@@ -10,14 +10,16 @@ using layers::Act;
 
 namespace {
 int conv_out(int n, int k, int s, int p) { return (n + 2 * p - k) / s + 1; }
+// conv1 and the max-pool stride 4 between them; layer2's first block makes it 8, or not.
+int layer2_stride(const ModelConfig& cfg) { return cfg.head_stride / 4; }
 
 void zero(const Act& a) { std::memset(a.data, 0, a.floats() * sizeof(float)); }
 }  // namespace
 
 PoseNet::PoseNet(const ModelConfig& cfg)
     : cfg_(cfg),
-      mid_h_(conv_out(conv_out(conv_out(cfg.height(), 7, 2, 3), 3, 2, 1), 3, 2, 1)),
-      mid_w_(conv_out(conv_out(conv_out(cfg.width(), 7, 2, 3), 3, 2, 1), 3, 2, 1)),
+      mid_h_(conv_out(conv_out(conv_out(cfg.height(), 7, 2, 3), 3, 2, 1), 3, layer2_stride(cfg), 1)),
+      mid_w_(conv_out(conv_out(conv_out(cfg.width(), 7, 2, 3), 3, 2, 1), 3, layer2_stride(cfg), 1)),
       conv1_({cfg.channels, cfg.resnet_c64(), 7, 2, 3}),
       bn1_(cfg.resnet_c64(), true),
       pool_(3, 2, 1),
@@ -25,7 +27,7 @@ PoseNet::PoseNet(const ModelConfig& cfg)
       skip_(cfg.resnet_mid() + (cfg.convlstm ? cfg.hidden : 0), cfg.resnet_mid(), layers::ResidualKind::regular) {
   const int c64 = cfg.resnet_c64(), mid = cfg.resnet_mid();
   for (int i = 0; i < 3; ++i) resnet_.push_back(std::make_unique<layers::BasicBlock>(c64, c64, 1));
-  resnet_.push_back(std::make_unique<layers::BasicBlock>(c64, mid, 2));
+  resnet_.push_back(std::make_unique<layers::BasicBlock>(c64, mid, layer2_stride(cfg)));
   for (int i = 0; i < 3; ++i) resnet_.push_back(std::make_unique<layers::BasicBlock>(mid, mid, 1));
   stages_.resize(std::size_t(cfg.stages));
   for (int t = 0; t < cfg.stages; ++t) {
@@ -78,17 +80,18 @@ PoseNet::CropBox PoseNet::forward_cropped(const Act& x, CropBox box, int S) {
   const Act z0 = zero_feat_buf_.get(1, F, mid_h_, mid_w_);
   feats_ = full_feat_buf_.get(x.n, F, mid_h_, mid_w_);
   for (int n = 0; n < x.n; ++n) std::memcpy(feats_.data + n * z0.floats(), z0.data, z0.floats() * sizeof(float));
-  box.x0 = std::max(0, box.x0) / 8 * 8;
-  box.y0 = std::max(0, box.y0) / 8 * 8;
-  box.x1 = std::min(W, (box.x1 + 7) / 8 * 8);
-  box.y1 = std::min(H, (box.y1 + 7) / 8 * 8);
+  const int s = cfg_.head_stride;
+  box.x0 = std::max(0, box.x0) / s * s;
+  box.y0 = std::max(0, box.y0) / s * s;
+  box.x1 = std::min(W, (box.x1 + s - 1) / s * s);
+  box.y1 = std::min(H, (box.y1 + s - 1) / s * s);
   if (!box.empty()) {
     const int ch = box.y1 - box.y0, cw = box.x1 - box.x0;
     const Act in = crop_buf_.get(x.n, x.c, ch, cw);
     layers::copy_window(x, box.y0, box.x0, in, 0, 0, ch, cw);
     const Act f = head_forward(in);
-    // the crop's feature pixel (i, j) is the frame's (y0/8 + i, x0/8 + j)
-    const int oy = box.y0 / 8, ox = box.x0 / 8, fh = std::min(f.h, mid_h_ - oy), fw = std::min(f.w, mid_w_ - ox);
+    // the crop's feature pixel (i, j) is the frame's (y0/s + i, x0/s + j)
+    const int oy = box.y0 / s, ox = box.x0 / s, fh = std::min(f.h, mid_h_ - oy), fw = std::min(f.w, mid_w_ - ox);
     layers::copy_window(f, 0, 0, feats_, oy, ox, fh, fw);
   }
   cropped_ = true;

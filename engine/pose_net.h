@@ -53,7 +53,7 @@ class PoseNet : public layers::Module<PoseNet> {
     bool empty() const { return x1 <= x0 || y1 <= y0; }
   };
   // Inference only: forward() for an input that is zero outside `box` (a masked frame).
-  // The ResNet head runs on the box widened to multiples of 8, its stride, so the crop's
+  // The ResNet head runs on the box widened to multiples of its stride (pose.head_stride), so the crop's
   // pixel grid is the frame's; elsewhere its features are those of an all-zero frame
   // (computed once per weights). Exact but for the head's receptive field reaching past the
   // crop, which the caller's margin around the mask bounds (yelan bench crop measures it).

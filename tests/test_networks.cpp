@@ -299,6 +299,45 @@ TEST_CASE("pose net stages are sized from the config: 10 stages (past the old fi
   for (int t = 0; t < cfg.stages; ++t) CHECK(net.heatmap(t, 2).c == cfg.joints);
 }
 
+TEST_CASE("pose net at head_stride 4: the same parameters, heatmaps twice as fine, gradients by finite differences", "[networks][pose]") {
+  const ModelConfig base = load_model_config("tiny");
+  std::string text = base.json;
+  const std::string key = "\"convlstm\"";
+  text.insert(text.find(key), "\"head_stride\": 4, ");
+  const ModelConfig cfg = parse_model_config(text, "tiny-s4");
+  REQUIRE(cfg.head_stride == 4);
+  CHECK(base.head_stride == 8);
+  PoseNet fine(cfg), coarse(base);
+  layers::ParamList pf, pc;
+  fine.params(pf);
+  coarse.params(pc);
+  REQUIRE(pf.size() == pc.size());  // a stride-8 net's weights load into it, one for one
+  for (std::size_t i = 0; i < pf.size(); ++i) {
+    CHECK(pf[i].key == pc[i].key);
+    CHECK(pf[i].param->shape == pc[i].param->shape);
+  }
+  // conv1 and the max-pool divide by 4; layer2 no longer halves
+  const int h4 = (((cfg.height() + 1) / 2) + 1) / 2, w4 = (((cfg.width() + 1) / 2) + 1) / 2;
+  CHECK(fine.mid_h() == h4);
+  CHECK(fine.mid_w() == w4);
+  CHECK(coarse.mid_h() == (h4 + 1) / 2);
+  fine.init(3);
+  fine.set_training(false);
+  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 5);
+  fine.forward(x.act, cfg.window);
+  for (int p = 0; p < 3; ++p) {
+    CHECK(fine.heatmap(cfg.stages - 1, p).h == h4);
+    CHECK(fine.heatmap(cfg.stages - 1, p).w == w4);
+  }
+  PoseNet net(cfg);
+  CHECK(check_pose_gradients(net, cfg, 2, [](const std::string& key, int layer) {
+    return layer % 23 == 0 || key.rfind("in_cnn.5.0.", 0) == 0;
+  }) >= 10);
+  std::string bad = text;
+  bad.replace(bad.find("\"head_stride\": 4"), 16, "\"head_stride\": 2");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("pose.head_stride must be 8 or 4"));
+}
+
 TEST_CASE("pose net forward_cropped: features beyond the head's receptive field of the crop edge are the whole frame's", "[networks][pose]") {
   // A wide frame (64 x 512) whose right half is zero, as a masked frame is outside the mask.
   const std::string text =

@@ -127,7 +127,7 @@ double rel_error(const std::vector<float>& ours, const Array& ref) {
 
 }  // namespace
 
-TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs", "[parity]") {
+TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, and tiny at head_stride 4", "[parity]") {
   require_torch();
   const auto dir = std::filesystem::temp_directory_path() / ("yelan-parity-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -141,8 +141,17 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs", "[
     j["input"]["window"] = 1;
     std::ofstream(dir / "paper-w1.json") << j.dump(2);
   }
-  for (const std::string& name : std::vector<std::string>{"tiny", "small", (dir / "paper-w1.json").string()}) {
-    const std::string stem = name.find('/') == std::string::npos ? name : "paper-w1";
+  // tiny with pose.head_stride 4: layer2 at layer1's resolution, heatmaps twice as fine
+  {
+    std::ifstream in(source_dir() + "/weights_tools/configs/tiny.json");
+    auto j = nlohmann::json::parse(in);
+    j["name"] = "tiny-s4";
+    j["pose"]["head_stride"] = 4;
+    std::ofstream(dir / "tiny-s4.json") << j.dump(2);
+  }
+  for (const std::string& name :
+       std::vector<std::string>{"tiny", "small", (dir / "paper-w1.json").string(), (dir / "tiny-s4.json").string()}) {
+    const std::string stem = std::filesystem::path(name).stem().string();
     const std::string cs = (dir / (stem + ".h5")).string();
     const std::string cmd = "cd '" + source_dir() + "' && /usr/bin/python3 weights_tools/make_parity_case.py --config '" +
                             name + "' --seed 7 -o '" + cs + "' > /dev/null";

@@ -186,6 +186,38 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   CHECK(yelan::test::contains(bad_cfg.err, "no-such-config"));
 }
 
+TEST_CASE("train: --init starts from a checkpoint, which holds only its trained group, where the run needs no other", "[train][cli]") {
+  yelan::test::CliTempDir d("train-init");
+  std::string nomask = yelan::test::slurp(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
+  nomask.replace(nomask.find("\"convlstm\""), 10, "\"masked_input\": false, \"convlstm\"");
+  std::ofstream(d / "nomask.json") << nomask;
+  auto run = [&](const std::string& cfg, const std::string& out, std::vector<std::string> extra = {}) {
+    std::vector<std::string> v = {"train", "--stage", "pose", "--config", cfg, "--sim", "ben-dance3-front-high-static",
+                                  "--steps", "2", "--epoch-steps", "2", "--val-windows", "1", "--batch", "1", "--threads", "1",
+                                  "-o", d / out};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  REQUIRE(run(d / "nomask.json", "a").code == 0);
+  const auto fresh = run(d / "nomask.json", "fresh");
+  const auto from = run(d / "nomask.json", "from", {"--init", d / "a/checkpoint.h5"});
+  INFO(from.err);
+  REQUIRE(from.code == 0);
+  auto first_loss = [&](const std::string& dir) {
+    std::istringstream in(yelan::test::slurp(d / (dir + "/log.csv")));
+    std::string line;
+    std::getline(in, line);
+    std::getline(in, line);
+    return line.substr(0, line.find(',', line.find(',', line.find(',') + 1) + 1));
+  };
+  CHECK(first_loss("a") == first_loss("fresh"));  // the same draw from the same seed
+  CHECK(first_loss("from") != first_loss("fresh"));  // the checkpoint's weights, not the seed's
+  // A masked pose stage reads the mask net, which the checkpoint does not hold.
+  const auto masked = run("micro", "masked", {"--init", d / "a/checkpoint.h5"});
+  CHECK(masked.code != 0);
+  CHECK(yelan::test::contains(masked.err, "/mask"));
+}
+
 TEST_CASE("train: --steps fewer than --epoch-steps still validates at the end and writes best.h5", "[train][cli]") {
   // Issue 17 row 14: the run ended before its first epoch, so it reported "best validation 1e+30"
   // (the initial value) and wrote no best.h5.

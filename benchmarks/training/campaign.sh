@@ -348,6 +348,23 @@ case "$what" in
     CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_S7 BATCH=32 train mask mask-s16 "${MASK_S16_STEPS:-1000}" \
       --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip ${STOP_AT:+--stop-at "$STOP_AT"} \
       --init "${MASK_S16_INIT:-$RUNS/mask-s15/final.h5}" ;;
+  # Session 2026-11-29 (seventeenth): the pose net again, after eight sessions on stage 1.
+  # A body filling the frame spans 16 cells of the 17 x 22 heatmaps (106 mm a cell), and the
+  # net's image error on recordings it memorised (fit16) stays at 7-13 px: does resolution
+  # bound the 2D precision? pose-s17: pose-s5 (1000 steps on ds-s5, 12 mm better than the
+  # shipped pose net on ds-s5's validation, never shipped) 1000 more steps on ds-s7's 320
+  # dancer recordings; pose-s17-s4: the same from the same weights at pose.head_stride 4
+  # (33 x 44 heatmaps, the same parameters). Side by side at one thread each: ab-pose-s17.
+  train-pose-s17)
+    CFG=benchmarks/configs/small-pose0.125-nomask.json DATA=$DATA_S7 train pose pose-s17 "${POSE_S17_STEPS:-1000}" \
+      --occlusion --lr 3e-4 --init "${POSE_S17_INIT:-models/campaign/pose-s5/checkpoint.h5}" ;;
+  train-pose-s17-s4)
+    CFG=benchmarks/configs/small-pose0.125-nomask-s4.json DATA=$DATA_S7 train pose pose-s17-s4 "${POSE_S17_STEPS:-1000}" \
+      --occlusion --lr 3e-4 --init "${POSE_S17_INIT:-models/campaign/pose-s5/checkpoint.h5}" ;;
+  ab-pose-s17)
+    "$0" train-pose-s17 &
+    "$0" train-pose-s17-s4 &
+    wait ;;
   # Can the shipped pose net fit 16 recordings? Every 12th dancer recording of ds-s3's
   # training split (16), trained and validated on the same 16 from the shipped net, lr 1e-3
   # cosine. Run 2026-11-27 (MPJPE 90 mm on them at step 250; stopped at 367): it memorises

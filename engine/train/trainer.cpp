@@ -295,9 +295,17 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   mask.init(spec.seed * 2 + 1);
   pose.init(spec.seed * 2 + 2);
   if (!spec.init_weights.empty()) {
+    // A checkpoint holds only the group it trained: a group is taken wherever the file has
+    // one, and required where this run reads it (the trained stage, and the frozen mask net
+    // in front of a masked pose stage that has no --mask-weights).
     const weights::Weights w = weights::load_weights(spec.init_weights);
-    weights::load_group(w, "mask", mp, spec.init_weights);
-    weights::load_group(w, "pose", pp, spec.init_weights);
+    auto has = [&](const char* g) {
+      const auto it = w.groups.find(g);
+      return it != w.groups.end() && !it->second.empty();
+    };
+    const bool reads_mask = !pose_stage || (cfg.masked_input && spec.mask_weights.empty());
+    if (reads_mask || has("mask")) weights::load_group(w, "mask", mp, spec.init_weights);
+    if (pose_stage || has("pose")) weights::load_group(w, "pose", pp, spec.init_weights);
   }
   if (pose_stage && !spec.mask_weights.empty()) weights::load_group(weights::load_weights(spec.mask_weights), "mask", mp, spec.mask_weights);
   mask.weights_changed();

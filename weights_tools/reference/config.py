@@ -39,6 +39,7 @@ class ModelConfig:
     masked_input: bool = True      # False: stage 2 reads the whole input
     mask_role: str = "mask"        # mask | presence (stage 1 only says whether anyone is there) | none
     crop_margin: int = 0           # inference only (C++ PoseNet::forward_cropped); 0: whole frame
+    head_stride: int = 8           # the ResNet head's stride: 8, or 4 (layer2 keeps layer1's resolution)
     representation: str = "tore"   # or "counts": log(1 + events) per polarity per frame period              # the JSON object this was read from
 
     @property
@@ -111,6 +112,7 @@ def config_from_dict(d, where="config"):
         raw=d,
         masked_input=_get_bool(p, where + ".pose", "masked_input", True),
         crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
+        head_stride=_get(p, where + ".pose", "head_stride", int, 8),
         representation=_get(i, where + ".input", "representation", str, "tore"),
         mask_role=_get(m, where + ".mask", "role", str,
                        "mask" if _get_bool(p, where + ".pose", "masked_input", True) else "none"),
@@ -138,6 +140,7 @@ def config_from_dict(d, where="config"):
         (cfg.downscale >= 1, "input.downscale must be >= 1"),
         (cfg.window >= 1, "input.window must be >= 1"),
         (cfg.crop_margin >= 0, "pose.crop_margin must be >= 0"),
+        (cfg.head_stride in (8, 4), "pose.head_stride must be 8 or 4"),
         (cfg.mask_role in ("mask", "presence", "none"), "mask.role must be mask, presence or none"),
         ((cfg.mask_role == "mask") == cfg.masked_input,
          "mask.role mask goes with pose.masked_input true, presence and none with false"),

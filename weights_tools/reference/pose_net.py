@@ -7,9 +7,10 @@ from .blocks import down_block, flat_softmax, regular_block, resnet_layer, up_bl
 from .dsnt import joints_from_heatmaps
 
 
-def head_output_size(h, w):
-    """Spatial size after conv1 (7x7/2 p3), maxpool (3x3/2 p1) and layer2's stride 2."""
-    for k, s, p in ((7, 2, 3), (3, 2, 1), (3, 2, 1)):
+def head_output_size(h, w, head_stride=8):
+    """Spatial size after conv1 (7x7/2 p3), maxpool (3x3/2 p1) and layer2's stride (2, or 1
+    at head_stride 4)."""
+    for k, s, p in ((7, 2, 3), (3, 2, 1), (3, head_stride // 4, 1)):
         h = (h + 2 * p - k) // s + 1
         w = (w + 2 * p - k) // s + 1
     return h, w
@@ -103,8 +104,8 @@ class PoseNet(nn.Module):
             nn.BatchNorm2d(c64), nn.ReLU(inplace=True),
             nn.MaxPool2d(3, stride=2, padding=1),
             resnet_layer(c64, c64, 3, 1),
-            resnet_layer(c64, mid, 4, 2))
-        self.mid_hw = head_output_size(cfg.height, cfg.width)
+            resnet_layer(c64, mid, 4, cfg.head_stride // 4))
+        self.mid_hw = head_output_size(cfg.height, cfg.width, cfg.head_stride)
         if cfg.convlstm != "none":
             self.cl = WindowConvLSTM(mid, cfg.hidden, cfg.convlstm == "bidirectional")
         self.cl_skip_block = regular_block(mid + (cfg.hidden if cfg.convlstm != "none" else 0), mid)

@@ -169,6 +169,19 @@ class Shapes(unittest.TestCase):
         self.assertEqual(tuple(joints.shape), (3, 13, 3))
         self.assertTrue(bool((joints.abs() < 1).all()))
 
+    def test_head_stride_4_keeps_the_parameters_and_doubles_the_heatmaps(self):
+        from weights_tools.reference.config import ConfigError
+        ref = _tools()[0]
+        coarse, fine = ref.PoseNet(_cfg()), ref.PoseNet(_cfg(**{"pose.head_stride": 4}))
+        self.assertEqual({k: v.shape for k, v in coarse.state_dict().items()},
+                         {k: v.shape for k, v in fine.state_dict().items()})
+        with torch.no_grad():
+            heatmaps, _ = fine.eval()(torch.rand(3, 6, 37, 75))
+        # 37x75 -> conv1 19x38 -> maxpool 10x19, which layer2 keeps
+        self.assertEqual(tuple(heatmaps[-1][0].shape), (3, 13, 10, 19))
+        with self.assertRaisesRegex(ConfigError, "pose.head_stride must be 8 or 4"):
+            _cfg(**{"pose.head_stride": 2})
+
     def test_batch_of_windows_equals_windows_one_by_one(self):
         ref = _tools()[0]
         cfg = ref.load_config("tiny")
