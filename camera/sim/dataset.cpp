@@ -190,6 +190,15 @@ SimSpec dataset_room_member(const std::string& split, int i, std::uint64_t seed,
 
 std::string dataset_file_name(const SimSpec& spec) { return spec.name + ".yelan.h5"; }
 
+void remix_member_arms(SimSpec& s, std::uint64_t seed, int i, bool room, double p) {
+  if (!(p >= 0 && p <= 1)) throw std::invalid_argument("dataset: the share of remixed arms must be in 0..1");
+  if (p == 0 || !s.dancer) return;
+  Rng r(hash64(seed, split_stream("train") ^ (room ? 0xa4e5d007ull : 0xa4e5ull), std::uint64_t(i)), 0x4e31);
+  if (!(r.uniform() < p)) return;
+  for (double& o : s.arm_offset_s) o = r.uniform(0.25, 3.0);
+  s.name += "-remix";
+}
+
 int make_dataset(const DatasetSpec& d, std::ostream& err) {
   if (d.out_dir.empty()) throw std::invalid_argument("dataset: no output folder");
   if (d.train < 0 || d.val < 0 || d.test < 0 || d.train_empty < 0 || d.val_empty < 0 || d.test_empty < 0 ||
@@ -205,6 +214,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   // Low light is not in the files' names: adding to a dataset drawn at another level would
   // mix two lightings under one name. Manifests from before the key were drawn at 4 DN.
   const double low_dn = d.low_light_dn ? *d.low_light_dn : lighting(LightLevel::low, false).level;
+  if (!(d.remix_arms >= 0 && d.remix_arms <= 1)) throw std::invalid_argument("dataset: the share of remixed arms must be in 0..1");
   if (const fs::path old = fs::path(d.out_dir) / "manifest.json"; fs::exists(old)) {
     std::ifstream in(old);
     nlohmann::json m;
@@ -222,6 +232,14 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
           << low_dn << ": give --low-light-dn " << was << " to add to it, or another folder";
       throw std::invalid_argument(msg.str());
     }
+    // The same for the remixed arms (manifests from before the key had none).
+    const double remixed = m.is_object() && m.contains("remix_arms") && m["remix_arms"].is_number() ? m["remix_arms"].get<double>() : 0.0;
+    if (remixed != d.remix_arms) {
+      std::ostringstream msg;
+      msg << "dataset " << d.out_dir << " was drawn with --remix-arms " << remixed << " (its manifest), this run asks "
+          << d.remix_arms << ": give the manifest's share to add to it, or another folder";
+      throw std::invalid_argument(msg.str());
+    }
   }
   struct Job {
     std::string split;
@@ -236,6 +254,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"looks", d.random_looks ? "random per training recording" : "the cast's"},
                                      {"frame_dancer", d.frame_dancer},
                                      {"low_light_dn", low_dn},
+                                     {"remix_arms", d.remix_arms},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"room_counts", {{"train", d.train_rooms}, {"val", d.val_rooms}, {"test", d.test_rooms}}},
@@ -252,6 +271,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     fs::create_directories(fs::path(d.out_dir) / split);
     for (int i = 0; i < n; ++i) {
       Job j{split, dataset_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
+      if (split == "train") remix_member_arms(j.spec, d.seed, i, false, d.remix_arms);
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }
@@ -270,6 +290,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     const int dancer_rooms = split == "train" ? d.train_dancer_rooms : split == "val" ? d.val_dancer_rooms : d.test_dancer_rooms;
     for (int i = 0; i < dancer_rooms; ++i) {
       Job j{split, dataset_dancer_room_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
+      if (split == "train") remix_member_arms(j.spec, d.seed, i, true, d.remix_arms);
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

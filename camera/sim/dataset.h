@@ -47,6 +47,11 @@ struct DatasetSpec {
   // the simulator's (SceneConfig::light_dn): 4 makes ds-s1 and ds-s2, drawn before low light
   // was raised to 20 DN.
   std::optional<double> low_light_dn;
+  // The share of training dancers (plain and in furnished rooms) whose arms play their clip
+  // 0.25-3 s after the body, each arm its own offset (SimSpec::arm_offset_s; named
+  // ...-remix): arm and body poses the 13 training clips never had together. Drawn from its
+  // own stream, so every other member keeps its bytes; validation and test are never remixed.
+  double remix_arms = 0;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };
@@ -64,6 +69,9 @@ SimSpec dataset_room_member(const std::string& split, int i, std::uint64_t seed,
 SimSpec dataset_dancer_room_member(const std::string& split, int i, std::uint64_t seed, double duration_s,
                                    bool random_looks = false, bool frame_dancer = false);
 std::string dataset_file_name(const SimSpec& spec);
+// Training dancer i of a dataset of `seed` with share p of remixed arms: sets its arm
+// offsets and appends "-remix" to its name when the draw says so (room: a dancer-room member).
+void remix_member_arms(SimSpec& spec, std::uint64_t seed, int i, bool room, double p);
 
 // Simulates what is missing, in parallel, and writes the manifest (every member's scene as
 // JSON, split, file). Returns the number of recordings simulated now.

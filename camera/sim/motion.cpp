@@ -78,6 +78,29 @@ BodyPose mirror_pose(const BodyPose& pose) {
   return m;
 }
 
+namespace {
+// Columns: across (left shoulder -> right), forward, up (chest -> neck); orthonormal.
+Eigen::Matrix3d chest_frame(const BodyPose& p) {
+  const Vec3 up = (p.p[kNeck] - p.p[kChest]).normalized();
+  Vec3 across = p.p[kShoulderR] - p.p[kShoulderL];
+  across = (across - across.dot(up) * up).normalized();
+  Eigen::Matrix3d f;
+  f.col(0) = across;
+  f.col(1) = up.cross(across);
+  f.col(2) = up;
+  return f;
+}
+}  // namespace
+
+BodyPose with_arm_from(const BodyPose& body, const BodyPose& arms, int side) {
+  if (side != 0 && side != 1) throw std::invalid_argument("with_arm_from: side must be 0 (right) or 1 (left)");
+  const Eigen::Matrix3d turn = chest_frame(body) * chest_frame(arms).transpose();
+  BodyPose out = body;
+  for (int point : {kShoulderR, kElbowR, kWristR, kHandTipR})
+    out.p[point + side] = body.p[kNeck] + turn * (arms.p[point + side] - arms.p[kNeck]);
+  return out;
+}
+
 Eigen::Matrix3d turn_to_face_minus_y(const BodyPose& pose) {
   const Vec3 f = (pose.p[kHipL] - pose.p[kHipR]).cross(Vec3::UnitZ());
   return Eigen::AngleAxisd(-kPi / 2 - std::atan2(f.y(), f.x()), Vec3::UnitZ()).toRotationMatrix();

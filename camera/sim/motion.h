@@ -54,6 +54,13 @@ std::vector<Bone> body_bones(const BodyShape& shape);
 // Left/right swap of every pair and x -> -x (a reflection in the plane x = 0).
 BodyPose mirror_pose(const BodyPose& pose);
 
+// `body` with the arm on `side` (0 right, 1 left: shoulder, elbow, wrist, finger tip) taken
+// from `arms`: each of its points relative to arms' neck, turned from arms' chest frame into
+// body's (up: chest -> neck; across: the shoulders' line) and hung from body's neck. Every
+// bone keeps its length; the rest of body is unchanged. A pose the clip never had, from two
+// that it had (SimSpec::arm_offset_s).
+BodyPose with_arm_from(const BodyPose& body, const BodyPose& arms, int side);
+
 // The turn about the world z axis that makes `pose` face -y (the rest facing and the views'
 // front), its facing taken from the hips: (left - right) x up.
 Eigen::Matrix3d turn_to_face_minus_y(const BodyPose& pose);

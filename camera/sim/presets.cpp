@@ -101,7 +101,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
   static const std::vector<std::string> known = {
       "preset", "name", "character", "motion", "speed", "mirror", "yaw_offset_deg", "static_legs", "view", "yaw_deg",
       "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "light_dn", "flicker", "background", "occluders", "clutter", "camera_motion",
-      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir", "looks_seed"};
+      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir", "looks_seed", "arm_offset_s"};
   for (auto& [key, value] : j.items())
     if (std::find(known.begin(), known.end(), key) == known.end())
       throw std::invalid_argument(what + ": unknown key '" + key + "'");
@@ -120,6 +120,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     num(j, "yaw_offset_deg", s.motion_options.yaw_deg);
     if (j.contains("mirror")) s.motion_options.mirror = j.at("mirror").get<bool>();
     if (j.contains("static_legs")) s.dance_static_legs = j.at("static_legs").get<bool>();
+    if (j.contains("arm_offset_s")) s.arm_offset_s = j.at("arm_offset_s").get<std::array<double, 2>>();
     std::string v;
     if (j.contains("view") && !parse_view(v = j.at("view").get<std::string>(), s.scene.view))
       throw std::invalid_argument("view '" + v + "' is not front|back|left|right");

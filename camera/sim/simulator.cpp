@@ -102,6 +102,8 @@ Simulator::Simulator(const SimSpec& spec)
   if (!(spec.motion_begin >= 0 && spec.motion_begin < spec.motion_end && spec.motion_end <= 1) ||
       !(spec.motion_offset_s >= 0 && spec.motion_offset_s < 1e6))
     throw std::invalid_argument("motion segment must satisfy 0 <= begin < end <= 1 and the offset be >= 0 s");
+  for (double o : spec.arm_offset_s)
+    if (!(o >= 0 && o <= 60)) throw std::invalid_argument("arm offsets must lie in 0..60 s, got " + std::to_string(o));
   if (!(spec.duration_s > 0) || spec.duration_s > 24 * 3600)
     throw std::invalid_argument("duration must be in (0 s, 24 h], got " + std::to_string(spec.duration_s));
   if (!(spec.label_hz >= 1 && spec.label_hz <= 10000) || !(spec.mask_hz >= 1 && spec.mask_hz <= 1000))
@@ -152,9 +154,17 @@ double Simulator::motion_time(double t_s) const {
   return a + (m <= d ? m : 2 * d - m);
 }
 
+BodyPose Simulator::pose_at(double t_s) const {
+  BodyPose p = motion_->at(motion_time(t_s));
+  for (int side = 0; side < 2; ++side)
+    if (spec_.arm_offset_s[side] != 0)
+      p = with_arm_from(p, motion_->at(motion_time(t_s + spec_.arm_offset_s[side])), side);
+  return p;
+}
+
 void Simulator::sample(double t_s) {
   prev_pose_ = pose_;
-  pose_ = motion_->at(motion_time(t_s));
+  pose_ = pose_at(t_s);
   const BodyPose& pose = pose_;
   dresser_.update(pose, t_s);
   prims_.clear();
@@ -166,7 +176,7 @@ void Simulator::sample(double t_s) {
 }
 
 Label Simulator::label_at(double t_s) const {
-  const Joints13 world = dhp19_joints(motion_->at(motion_time(t_s)));
+  const Joints13 world = dhp19_joints(pose_at(t_s));
   const CameraModel cam = scene_.camera_at(t_s);
   Label l;
   l.t_us = std::llround(t_s * 1e6);
@@ -308,6 +318,7 @@ std::string Simulator::description_json() const {
   // Only where it overrides the lighting's level, so the descriptions of other scenes keep their bytes.
   if (sc.light_dn && *sc.light_dn != lighting(sc.light, false).level) j["light_dn"] = *sc.light_dn;
   if (sc.clutter) j["clutter"] = true;
+  if (spec_.arm_offset_s[0] != 0 || spec_.arm_offset_s[1] != 0) j["arm_offset_s"] = spec_.arm_offset_s;
   return j.dump();
 }
 

@@ -5,6 +5,7 @@
 // frame at label_hz, the human mask at mask_hz. Results go to a SimSink: a recording file,
 // the trainer's stream, previews. Deterministic given the seed, whatever the thread count.
 #pragma once
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -49,6 +50,11 @@ struct SimSpec {
   // labels are all invalid and masks empty. Negative data for stage 1's "nobody there".
   bool dancer = true;
   bool dance_static_legs = false;   // procedural only: upper body moves, legs stay put
+  // Nonzero: the right [0] and left [1] arm play the motion this many seconds after the body
+  // (inside the segment played, back and forth as the body does), each hung from the body's
+  // neck in its chest's frame (with_arm_from): arm and body poses the clip never had
+  // together. Datasets draw it for some training recordings (--remix-arms).
+  std::array<double, 2> arm_offset_s{0, 0};
   SceneConfig scene;
   PixelParams pixel = pixel_params_davis346();
   double duration_s = 2;
@@ -111,6 +117,7 @@ class Simulator {
   // the flicker factor.
   const float* lit(const float* intensity, double t_s);
   double motion_time(double t_s) const;  // clips longer than their motion play back and forth
+  BodyPose pose_at(double t_s) const;    // the motion at t_s, its arms remixed (arm_offset_s)
   double image_speed(const BodyPose& a, const BodyPose& b, double dt) const;  // px/s, fastest body point
   BodyPose pose_{}, prev_pose_{};
   SimSpec spec_;

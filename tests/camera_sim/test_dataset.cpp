@@ -4,6 +4,8 @@
 
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -15,6 +17,7 @@
 #include "camera/sim/dataset.h"
 #include "camera/sim/presets.h"
 #include "camera/sim/simulator.h"
+#include "test_util.h"
 
 using namespace yelan::camera::sim;
 
@@ -108,6 +111,11 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   CHECK(text.str().find("\"yelan-dataset-manifest\"") != std::string::npos);
   CHECK(text.str().find(first) != std::string::npos);
   CHECK(text.str().find("\"low_light_dn\": 20") != std::string::npos);
+  CHECK(text.str().find("\"remix_arms\": 0") != std::string::npos);
+  // Nor is a share of remixed arms other than the manifest's added to it.
+  d.remix_arms = 0.5;
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--remix-arms 0"));
+  d.remix_arms = 0;
   // Low light is not in the names: adding at another level than the manifest's is refused.
   d.low_light_dn = 4;
   CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--low-light-dn 20"));
@@ -304,4 +312,76 @@ TEST_CASE("dataset: dancers in furnished rooms are drawn as dancers, from their 
   CHECK_FALSE(plain.scene.clutter);
   CHECK(plain.name.rfind("train-00007-", 0) == 0);
   CHECK_THROWS_AS(dataset_dancer_room_member("dev", 0, 1, 5.0), std::invalid_argument);
+}
+
+TEST_CASE("dataset: remixed arms keep every bone, take the arm's pose from its own time, and change nothing else", "[sim]") {
+  SimSpec s = preset_spec("ben-05_04-front-high-static");
+  s.duration_s = 1;
+  s.frame_dancer = true;
+  const Simulator plain(s);
+  SimSpec r = s;
+  r.arm_offset_s = {0.8, 1.7};
+  const Simulator mixed(r);
+  const BodyShape shape = mixed.character().shape;
+  const auto bones = body_bones(shape);
+  const auto motion = load_bvh_motion(yelan::test::shared_data_or_skip("mocap/05_04.bvh"), shape);
+  double moved = 0;
+  for (double t : {0.0, 0.3, 0.71}) {
+    const Label a = plain.label_at(t), b = mixed.label_at(t);
+    // head, hips, knees and feet are the body's; shoulders, elbows and hands move
+    for (int j : {0, 5, 6, 9, 10, 11, 12}) CHECK((a.joints_mm[j] - b.joints_mm[j]).norm() < 1e-6);
+    for (int j : {3, 4, 7, 8}) moved = std::max(moved, (a.joints_mm[j] - b.joints_mm[j]).norm());
+  }
+  CHECK(moved > 100);  // mm: poses the clip did not have at that instant
+  // The transplant itself: rigid, the arm's own bend kept, the rest of the body untouched.
+  for (double t : {0.5, 2.0, 4.5}) {
+    const BodyPose body = motion->at(t), arms = motion->at(t + 1.3);
+    for (int side : {0, 1}) {
+      const BodyPose m = with_arm_from(body, arms, side);
+      for (const Bone& bone : bones) CHECK(std::abs((m.p[bone.a] - m.p[bone.b]).norm() / bone.length_mm - 1) < 1e-9);
+      const auto angle = [&](const BodyPose& p) {
+        const Vec3 u = p.p[kShoulderR + side] - p.p[kElbowR + side], v = p.p[kWristR + side] - p.p[kElbowR + side];
+        return std::acos(u.normalized().dot(v.normalized()));
+      };
+      CHECK(angle(m) == Approx(angle(arms)).margin(1e-9));
+      for (int point = 0; point < kBodyPointCount; ++point) {
+        const bool arm = point == kShoulderR + side || point == kElbowR + side || point == kWristR + side || point == kHandTipR + side;
+        if (!arm) CHECK((m.p[point] - body.p[point]).norm() == 0);
+      }
+      const BodyPose same = with_arm_from(body, body, side);  // its own arm: itself
+      for (int point = 0; point < kBodyPointCount; ++point) CHECK((same.p[point] - body.p[point]).norm() < 1e-9);
+    }
+  }
+  CHECK_THROWS_AS(with_arm_from(motion->at(0), motion->at(1), 2), std::invalid_argument);
+  // scene.json carries it; out of range is refused
+  const SimSpec fromj = spec_from_json(R"({"preset": "ben-05_04-front-high-static", "arm_offset_s": [0.5, 2]})", "x.json");
+  CHECK(fromj.arm_offset_s[0] == 0.5);
+  CHECK(fromj.arm_offset_s[1] == 2);
+  CHECK(nlohmann::json::parse(mixed.description_json()).at("arm_offset_s")[1] == 1.7);
+  CHECK_FALSE(nlohmann::json::parse(plain.description_json()).contains("arm_offset_s"));
+  r.arm_offset_s = {-0.5, 1};
+  CHECK_THROWS_AS(Simulator(r), std::invalid_argument);
+  // The dataset draws it for a share of the training dancers only, from its own stream.
+  int remixed = 0;
+  for (int i = 0; i < 200; ++i) {
+    SimSpec m = dataset_member("train", i, 1, 5.0, true, true);
+    const SimSpec before = m;
+    remix_member_arms(m, 1, i, false, 0.0);
+    CHECK(m.name == before.name);
+    remix_member_arms(m, 1, i, false, 0.5);
+    if (m.arm_offset_s[0] != 0) {
+      ++remixed;
+      CHECK(m.name == before.name + "-remix");
+      for (double o : m.arm_offset_s) CHECK((o >= 0.25 && o <= 3.0));
+      CHECK(m.arm_offset_s[0] != m.arm_offset_s[1]);
+    } else {
+      CHECK(m.name == before.name);
+    }
+    CHECK(m.seed == before.seed);  // every other draw is the member's own
+    CHECK(m.motion == before.motion);
+  }
+  CHECK(remixed > 70);
+  CHECK(remixed < 130);
+  SimSpec m = dataset_member("train", 3, 1, 5.0, true, true);
+  CHECK_THROWS_AS(remix_member_arms(m, 1, 3, false, 1.5), std::invalid_argument);
 }
