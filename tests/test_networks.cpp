@@ -336,6 +336,17 @@ TEST_CASE("pose net at head_stride 4: the same parameters, heatmaps twice as fin
   std::string bad = text;
   bad.replace(bad.find("\"head_stride\": 4"), 16, "\"head_stride\": 2");
   CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("pose.head_stride must be 8 or 4"));
+  // The crop path works on the stride's grid: the box widened to multiples of 4, the whole
+  // frame as the box is forward() itself.
+  fine.forward(x.act, cfg.window);
+  const std::vector<float> whole = fine.joints();
+  const PoseNet::CropBox ran = fine.forward_cropped(x.act, {5, 3, 30, 21}, cfg.window);
+  CHECK(ran.x0 == 4);
+  CHECK(ran.y0 == 0);
+  CHECK(ran.x1 == 32);
+  CHECK(ran.y1 == 24);
+  fine.forward_cropped(x.act, {0, 0, cfg.width(), cfg.height()}, cfg.window);
+  for (std::size_t i = 0; i < whole.size(); ++i) REQUIRE(fine.joints()[i] == Approx(whole[i]).margin(1e-5));
 }
 
 TEST_CASE("pose net forward_cropped: features beyond the head's receptive field of the crop edge are the whole frame's", "[networks][pose]") {

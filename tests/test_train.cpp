@@ -146,6 +146,13 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
                                         d / "wider.json", "-o", d / "wider.h5"});
   CHECK(cw.code == 2);
   CHECK(yelan::test::contains(cw.err, "do not fit"));
+  std::string fine = micro;
+  fine.replace(fine.find("\"convlstm\""), 10, "\"head_stride\": 4, \"convlstm\"");
+  std::ofstream(d / "fine.json") << fine;
+  const auto cs = yelan::test::run_cli({"weights", "combine", "--mask", d / "both.h5", "--pose", d / "both.h5", "--config",
+                                        d / "fine.json", "-o", d / "fine.h5"});
+  CHECK(cs.code == 2);
+  CHECK(yelan::test::contains(cs.err, "pose.head_stride"));
   CHECK_FALSE(std::filesystem::exists(d / "wider.h5"));
   // The trained weights evaluate on held-out test scenes; the JSON has the contract's keys.
   const auto ev = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--sim", "test", "--scenes", "2", "--seconds",
@@ -186,7 +193,7 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   CHECK(yelan::test::contains(bad_cfg.err, "no-such-config"));
 }
 
-TEST_CASE("train: --init starts from a checkpoint, which holds only its trained group, where the run needs no other", "[train][cli]") {
+TEST_CASE("train: --init starts from a checkpoint, which holds only its trained group, unless the run trains the other", "[train][cli]") {
   yelan::test::CliTempDir d("train-init");
   std::string nomask = yelan::test::slurp(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
   nomask.replace(nomask.find("\"convlstm\""), 10, "\"masked_input\": false, \"convlstm\"");
@@ -212,10 +219,19 @@ TEST_CASE("train: --init starts from a checkpoint, which holds only its trained 
   };
   CHECK(first_loss("a") == first_loss("fresh"));  // the same draw from the same seed
   CHECK(first_loss("from") != first_loss("fresh"));  // the checkpoint's weights, not the seed's
-  // A masked pose stage reads the mask net, which the checkpoint does not hold.
+  // A masked pose stage learns behind the true masks: it starts from the checkpoint too, and
+  // says its files' mask group is untrained.
   const auto masked = run("micro", "masked", {"--init", d / "a/checkpoint.h5"});
-  CHECK(masked.code != 0);
-  CHECK(yelan::test::contains(masked.err, "/mask"));
+  INFO(masked.err);
+  CHECK(masked.code == 0);
+  CHECK(yelan::test::contains(masked.err, "mask group of the files written here is untrained"));
+  // The mask stage trains the mask net, which a pose checkpoint does not hold.
+  const auto mask_stage = yelan::test::run_cli({"train", "--stage", "mask", "--config", "micro", "--sim",
+                                                "ben-dance3-front-high-static", "--steps", "1", "--val-windows", "1",
+                                                "--batch", "1", "--threads", "1", "--init", d / "a/checkpoint.h5", "-o",
+                                                d / "mask"});
+  CHECK(mask_stage.code != 0);
+  CHECK(yelan::test::contains(mask_stage.err, "/mask"));
 }
 
 TEST_CASE("train: --steps fewer than --epoch-steps still validates at the end and writes best.h5", "[train][cli]") {

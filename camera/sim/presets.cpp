@@ -120,7 +120,11 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     num(j, "yaw_offset_deg", s.motion_options.yaw_deg);
     if (j.contains("mirror")) s.motion_options.mirror = j.at("mirror").get<bool>();
     if (j.contains("static_legs")) s.dance_static_legs = j.at("static_legs").get<bool>();
-    if (j.contains("arm_offset_s")) s.arm_offset_s = j.at("arm_offset_s").get<std::array<double, 2>>();
+    if (j.contains("arm_offset_s")) {
+      const auto o = j.at("arm_offset_s").get<std::vector<double>>();
+      if (o.size() != 2) throw std::invalid_argument("arm_offset_s must be [right, left] (two numbers)");
+      s.arm_offset_s = {o[0], o[1]};
+    }
     std::string v;
     if (j.contains("view") && !parse_view(v = j.at("view").get<std::string>(), s.scene.view))
       throw std::invalid_argument("view '" + v + "' is not front|back|left|right");

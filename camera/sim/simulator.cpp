@@ -155,10 +155,14 @@ double Simulator::motion_time(double t_s) const {
 }
 
 BodyPose Simulator::pose_at(double t_s) const {
-  BodyPose p = motion_->at(motion_time(t_s));
+  const BodyPose body = motion_->at(motion_time(t_s));
+  BodyPose p = body;
+  // Each arm into the unremixed body's chest frame: the other arm's shoulder must not tilt it.
   for (int side = 0; side < 2; ++side)
-    if (spec_.arm_offset_s[side] != 0)
-      p = with_arm_from(p, motion_->at(motion_time(t_s + spec_.arm_offset_s[side])), side);
+    if (spec_.arm_offset_s[side] != 0) {
+      const BodyPose m = with_arm_from(body, motion_->at(motion_time(t_s + spec_.arm_offset_s[side])), side);
+      for (int point : {kShoulderR, kElbowR, kWristR, kHandTipR}) p.p[point + side] = m.p[point + side];
+    }
   return p;
 }
 

@@ -234,6 +234,10 @@ int combine(const Args& a, std::ostream& out) {
     for (const char* key : {"input", "mask"})
       if (!cn.contains(key) || shape(cn, key) != shape(cm, key))
         throw UsageError("weights combine: --config " + *c + " differs from " + *m + " in the '" + key + "' section");
+    // Strides 8 and 4 have the same tensors: only the config tells the networks apart.
+    if (nc.head_stride != parse_model_config(wp.config_json, *p).head_stride)
+      throw UsageError("weights combine: --config " + *c + " has another pose.head_stride than " + *p +
+                       " (the same tensors, another network: train it at that stride)");
     w.config_json = nc.json;
     try {
       const weights::LoadedNetworks fits(w, *c);

@@ -233,9 +233,6 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     err << "training windows of " << spec.mask_frames << " frame" << (spec.mask_frames > 1 ? "s" : "")
         << " (--mask-frames); validation windows of the config's " << cfg.window << "\n";
   fs::create_directories(spec.out_dir);
-  if (pose_stage && cfg.masked_input && spec.mask_weights.empty() && spec.init_weights.empty())
-    err << "note: the pose net learns from the simulator's true masks; the mask group of the files written here is "
-           "untrained (combine with a trained mask net: yelan weights combine; evaluate alone with --true-mask)\n";
   const std::string ckpt = (fs::path(spec.out_dir) / "checkpoint.h5").string();
   const std::string state_path = (fs::path(spec.out_dir) / "checkpoint.state").string();
   const std::string log_path = (fs::path(spec.out_dir) / "log.csv").string();
@@ -294,19 +291,25 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   pose.params(pp);
   mask.init(spec.seed * 2 + 1);
   pose.init(spec.seed * 2 + 2);
+  bool mask_loaded = false;
   if (!spec.init_weights.empty()) {
     // A checkpoint holds only the group it trained: a group is taken wherever the file has
-    // one, and required where this run reads it (the trained stage, and the frozen mask net
-    // in front of a masked pose stage that has no --mask-weights).
+    // one, and required for the stage trained (a pose stage reads a mask net only from
+    // --mask-weights; without it, the true masks).
     const weights::Weights w = weights::load_weights(spec.init_weights);
     auto has = [&](const char* g) {
       const auto it = w.groups.find(g);
       return it != w.groups.end() && !it->second.empty();
     };
-    const bool reads_mask = !pose_stage || (cfg.masked_input && spec.mask_weights.empty());
-    if (reads_mask || has("mask")) weights::load_group(w, "mask", mp, spec.init_weights);
+    if (!pose_stage || has("mask")) {
+      weights::load_group(w, "mask", mp, spec.init_weights);
+      mask_loaded = true;
+    }
     if (pose_stage || has("pose")) weights::load_group(w, "pose", pp, spec.init_weights);
   }
+  if (pose_stage && cfg.masked_input && spec.mask_weights.empty() && !mask_loaded)
+    err << "note: the pose net learns from the simulator's true masks; the mask group of the files written here is "
+           "untrained (combine with a trained mask net: yelan weights combine; evaluate alone with --true-mask)\n";
   if (pose_stage && !spec.mask_weights.empty()) weights::load_group(weights::load_weights(spec.mask_weights), "mask", mp, spec.mask_weights);
   mask.weights_changed();
   pose.weights_changed();
