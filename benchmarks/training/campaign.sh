@@ -141,6 +141,15 @@ train() {
     > "$RUNS/$name.out" 2>&1
 }
 
+# masked_pose NAME STEPS INIT [flags]: stage 2 behind stage 1's masks (the true ones, or with
+# --mask-weights the frozen mask net's own) on ds-s7, fine-tuned from INIT.
+masked_pose() {
+  local name=$1 steps=$2 init=$3
+  shift 3
+  CFG=benchmarks/configs/small-mask0.375-pose0.125-masked.json DATA=$DATA_S7 train pose "$name" "$steps" \
+    --occlusion --lr 3e-4 --init "$init" "$@"
+}
+
 mkdir -p "$RUNS"
 # The targets: the case labels of the dispatch below.
 targets() { sed -n 's/^  \([a-z0-9-]*\))\( .*\)\{0,1\}$/\1/p' "$0"; }
@@ -397,21 +406,19 @@ case "$what" in
   # on the whole TORE. Trained behind the frozen shipped mask net's own masks (what yelan run
   # feeds it) against behind the true masks, 1500 steps each from pose-s17 on ds-s7: ab-mask.
   train-pose-s19-netmask)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked.json DATA=$DATA_S7 train pose pose-s19-netmask "${POSE_S19_STEPS:-1500}" \
-      --occlusion --lr 3e-4 --init "${POSE_S19_INIT:-models/campaign/pose-s17/checkpoint.h5}" --mask-weights "${POSE_S19_MASK:-models/default.h5}" ;;
+    masked_pose pose-s19-netmask "${POSE_S19_STEPS:-1500}" "${POSE_S19_INIT:-models/campaign/pose-s17/checkpoint.h5}" \
+      --mask-weights "${POSE_S19_MASK:-models/default.h5}" ;;
   train-pose-s19-truemask)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked.json DATA=$DATA_S7 train pose pose-s19-truemask "${POSE_S19_STEPS:-1500}" \
-      --occlusion --lr 3e-4 --init "${POSE_S19_INIT:-models/campaign/pose-s17/checkpoint.h5}" ;;
+    masked_pose pose-s19-truemask "${POSE_S19_STEPS:-1500}" "${POSE_S19_INIT:-models/campaign/pose-s17/checkpoint.h5}" ;;
   # pose-s19-truemask's 1500 steps took 20 mm off pose-s17 behind the shipped stage 1 and were
   # still falling: 2000 more, the same recipe.
   train-pose-s20-truemask)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked.json DATA=$DATA_S7 train pose pose-s20-truemask "${POSE_S20_STEPS:-2000}" \
-      --occlusion --lr 3e-4 --init "${POSE_S20_INIT:-models/campaign/pose-s19-truemask/checkpoint.h5}" ;;
+    masked_pose pose-s20-truemask "${POSE_S20T_STEPS:-2000}" "${POSE_S20T_INIT:-models/campaign/pose-s19-truemask/checkpoint.h5}" ;;
   # pose-s19-netmask beat pose-s17 by 27 mm as deployed (behind the shipped stage 1) and
   # pose-s19-truemask by 8: 2000 more steps behind the frozen mask net, the same recipe.
   train-pose-s20-netmask)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked.json DATA=$DATA_S7 train pose pose-s20-netmask "${POSE_S20_STEPS:-2000}" \
-      --occlusion --lr 3e-4 --init "${POSE_S20_INIT:-models/campaign/pose-s19-netmask/checkpoint.h5}" --mask-weights "${POSE_S20_MASK:-models/default.h5}" ;;
+    masked_pose pose-s20-netmask "${POSE_S20N_STEPS:-2000}" "${POSE_S20N_INIT:-models/campaign/pose-s19-netmask/checkpoint.h5}" \
+      --mask-weights "${POSE_S20N_MASK:-models/default.h5}" ;;
   ab-mask)
     "$0" train-pose-s19-netmask &
     "$0" train-pose-s19-truemask &
