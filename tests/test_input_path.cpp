@@ -3,7 +3,11 @@
 // TORE of every event so far, downscaled, masked by stage 1's own current mask).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <memory>
+#include <set>
 
 #include "camera/io/event_reader.h"
 #include "camera/sim/presets.h"
@@ -16,28 +20,46 @@
 
 namespace sim = yelan::camera::sim;
 
+namespace {
+
+// A 0.9 s recording and a micro model with a random mask net, in eval mode.
+struct RecordingFixture {
+  yelan::test::CliTempDir d{"input-path"};
+  std::string rec = d / "one.yelan.h5", w = d / "w.h5";
+  std::unique_ptr<yelan::weights::LoadedNetworks> nets;
+  RecordingFixture() {
+    sim::SimSpec s = sim::preset_spec("ben-dance3-front-high-dynamic");
+    s.duration_s = 0.9;
+    sim::write_recording(s, rec);
+    const auto init = yelan::test::run_cli({"weights", "init", "--config", "micro", "-o", w, "--seed", "4"});
+    INFO(init.err);
+    REQUIRE(init.code == 0);
+    nets = std::make_unique<yelan::weights::LoadedNetworks>(yelan::weights::load_weights(w), w);
+    nets->mask.set_training(false);
+  }
+  // Window k of the recording, `lead` frames before the config's window.
+  sim::SimWindow window(int k, int lead) {
+    sim::WindowStreamOptions o;
+    o.window = lead + nets->cfg.window;
+    o.history_s = 5;
+    sim::RecordingWindowStream stream({rec}, 1, o);
+    sim::SimWindow win;
+    for (int i = 0; i <= k; ++i) stream.next(win);
+    return win;
+  }
+};
+
+}  // namespace
+
 TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at the same instant", "[run]") {
-  yelan::test::CliTempDir d("input-path");
-  const std::string rec = d / "one.yelan.h5", w = d / "w.h5";
-  sim::SimSpec s = sim::preset_spec("ben-dance3-front-high-dynamic");
-  s.duration_s = 0.9;
-  sim::write_recording(s, rec);
-  const auto init = yelan::test::run_cli({"weights", "init", "--config", "micro", "-o", w, "--seed", "4"});
-  INFO(init.err);
-  REQUIRE(init.code == 0);
+  RecordingFixture fx;
+  const std::string &w = fx.w, &rec = fx.rec;
 
   // The trainer's side: consecutive windows with the full history, behind the frozen mask net.
-  yelan::weights::LoadedNetworks nets(yelan::weights::load_weights(w), w);
-  const yelan::ModelConfig& cfg = nets.cfg;
-  nets.mask.set_training(false);
-  sim::WindowStreamOptions o;
-  o.window = cfg.window;
-  o.history_s = 5;
-  sim::RecordingWindowStream stream({rec}, 1, o);
-  sim::SimWindow win;
-  for (int k = 0; k < 12; ++k) stream.next(win);  // well into the recording
+  const yelan::ModelConfig& cfg = fx.nets->cfg;
+  const sim::SimWindow win = fx.window(11, 0);  // well into the recording
   yelan::train::BatchBuilder builder(cfg, 1, yelan::train::MaskSource::net);
-  builder.add(win, nets.mask, nullptr);
+  builder.add(win, fx.nets->mask, nullptr);
   const yelan::layers::Act& batch = builder.batch().input.act;
 
   // `yelan run`'s side: ticks on the recording's frame times, stage 1 on every tick.
@@ -70,4 +92,93 @@ TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at t
   double sum = 0;
   for (std::size_t i = 0; i < per_frame; ++i) sum += batch.data[i];
   CHECK(sum > 0);
+}
+
+
+TEST_CASE("mask reuse: each frame behind the future mask of stage 1's latest run, as early exit", "[run]") {
+  RecordingFixture fx;
+  yelan::ModelConfig cfg = fx.nets->cfg;
+  const int S = cfg.window, d = cfg.downscale, lead = 4;
+  REQUIRE(cfg.n_masks >= 3);
+  REQUIRE(S >= 2);
+  const int sh = cfg.sensor_height, sw = cfg.sensor_width;
+  const sim::SimWindow win = fx.window(6, lead);
+  yelan::layers::ActBuf one, expect;
+  one.resize(1, cfg.channels, cfg.height(), cfg.width());
+  expect.resize(1, cfg.channels, cfg.height(), cfg.width());
+  {
+    // Cut at the median probability of a future mask, so that masks of other ages differ
+    // (a random net's masks all keep everything at its usual cut).
+    const auto& f = win.frames[std::size_t(lead)];
+    yelan::input::downscale_tore(f.tore, sh, sw, d, one.act, 0);
+    yelan::layers::NoGrad no_grad;
+    fx.nets->mask.forward(one.act);
+    const yelan::layers::Act& m = fx.nets->mask.masks();
+    std::vector<float> p(m.pixels());
+    for (std::size_t i = 0; i < p.size(); ++i) p[i] = 1 / (1 + std::exp(-m.data[i * 16 + 1]));  // channel 1
+    std::nth_element(p.begin(), p.begin() + p.size() / 2, p.end());
+    cfg.mask_cut = p[p.size() / 2];
+  }
+  std::vector<float> keep, fresh_keep;
+  int ages_seen = 0;
+  bool some_mask_differs = false;
+  std::size_t per_frame = 0;
+  // {2, 1}: runs at frames -1, 1, ...; {3, 2}: at -2, 1, ...; {3, 1}: at -1, 2, ...
+  for (const yelan::train::MaskReuse reuse : {yelan::train::MaskReuse{2, 1}, {3, 2}, {3, 1}}) {
+    yelan::train::BatchBuilder builder(cfg, 1, yelan::train::MaskSource::net, lead);
+    builder.add(win, fx.nets->mask, nullptr, nullptr, false, &reuse);
+    const yelan::layers::Act& got = builder.batch().input.act;
+    per_frame = std::size_t(got.cb()) * got.pixels() * 16;
+    // By hand: stage 1 on frame t - age alone, its mask `age` cut where the config cuts.
+    for (int t = 0; t < S; ++t) {
+      const int age = (t + reuse.phase) % reuse.period;
+      INFO("period " << reuse.period << ", phase " << reuse.phase << ": frame " << t << ", mask age " << age);
+      const auto& f = win.frames[std::size_t(lead + t - age)];
+      yelan::input::downscale_tore(f.tore, sh, sw, d, one.act, 0);
+      yelan::layers::NoGrad no_grad;
+      fx.nets->mask.forward(one.act);
+      yelan::input::mask_cut(fx.nets->mask.masks(), 0, age, keep, float(cfg.mask_cut));
+      yelan::input::mask_cut(fx.nets->mask.masks(), 0, 0, fresh_keep, float(cfg.mask_cut));
+      if (age > 0) some_mask_differs |= keep != fresh_keep;
+      ages_seen |= 1 << age;
+      const auto& g = win.frames[std::size_t(lead + t)];
+      yelan::input::downscale_tore(g.tore, sh, sw, d, expect.act, 0);
+      yelan::input::apply_mask(expect.act, 0, keep);
+      CHECK(std::memcmp(expect.act.data, got.data + std::size_t(t) * per_frame, per_frame * sizeof(float)) == 0);
+    }
+  }
+  CHECK(ages_seen == 7);
+  CHECK(some_mask_differs);  // else reading the current mask would pass as well
+
+  // Every frame a fresh run: the path without reuse, value for value (its windows lead 0).
+  const yelan::train::MaskReuse every{1, 0};
+  yelan::train::BatchBuilder a(cfg, 1, yelan::train::MaskSource::net, lead), b(cfg, 1, yelan::train::MaskSource::net);
+  a.add(win, fx.nets->mask, nullptr, nullptr, false, &every);
+  const sim::SimWindow plain = fx.window(6, 0);
+  REQUIRE(plain.frames[0].t_us != win.frames[std::size_t(lead)].t_us);  // the stream draws windows by their length
+  sim::SimWindow cut = win;
+  cut.frames.erase(cut.frames.begin(), cut.frames.begin() + lead);
+  b.add(cut, fx.nets->mask, nullptr);
+  CHECK(std::memcmp(a.batch().input.act.data, b.batch().input.act.data, S * per_frame * sizeof(float)) == 0);
+
+  // A phase beyond the window's lead, a period beyond the future masks: refused.
+  yelan::train::BatchBuilder c(cfg, 1, yelan::train::MaskSource::net, lead);
+  const yelan::train::MaskReuse far{lead + 2, lead + 1}, long_period{cfg.n_masks + 1, 0};
+  CHECK_THROWS_AS(c.add(win, fx.nets->mask, nullptr, nullptr, false, &far), std::invalid_argument);
+  CHECK_THROWS_AS(c.add(win, fx.nets->mask, nullptr, nullptr, false, &long_period), std::invalid_argument);
+}
+
+TEST_CASE("mask reuse: periods drawn over 1..N, phases below the period", "[run]") {
+  sim::Rng r(7, 1);
+  std::set<std::pair<int, int>> seen;
+  for (int i = 0; i < 2000; ++i) {
+    const auto m = yelan::train::draw_mask_reuse(r, 4);
+    REQUIRE(m.period >= 1);
+    REQUIRE(m.period <= 4);
+    REQUIRE(m.phase >= 0);
+    REQUIRE(m.phase < m.period);
+    seen.insert({m.period, m.phase});
+  }
+  CHECK(seen.size() == 10);  // 1 + 2 + 3 + 4 (period, phase) pairs
+  CHECK_THROWS_AS(yelan::train::draw_mask_reuse(r, 0), std::invalid_argument);
 }

@@ -425,13 +425,22 @@ TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bi
   CHECK(yelan::test::contains(none.err, "no recordings"));
 }
 
+namespace {
+
+// A dataset folder (train/, val/) holding one dancer recording of `duration` in each split.
+void one_recording_dataset(const std::string& dir, const std::string& duration) {
+  std::filesystem::create_directories(dir + "/train");
+  std::filesystem::create_directories(dir + "/val");
+  REQUIRE(yelan::test::run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", duration, "-o",
+                                dir + "/train/t.yelan.h5"}).code == 0);
+  std::filesystem::copy_file(dir + "/train/t.yelan.h5", dir + "/val/v.yelan.h5");
+}
+
+}  // namespace
+
 TEST_CASE("train: --windows-per-visit decides the windows drawn, is kept in run.json, and --resume keeps to it", "[train][cli]") {
   yelan::test::CliTempDir d("train-visit");
-  std::filesystem::create_directories(d / "ds/train");
-  std::filesystem::create_directories(d / "ds/val");
-  REQUIRE(yelan::test::run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.6s", "-o",
-                                d / "ds/train/t.yelan.h5"}).code == 0);
-  std::filesystem::copy_file(d / "ds/train/t.yelan.h5", d / "ds/val/v.yelan.h5");
+  one_recording_dataset(d / "ds", "0.6s");
   auto run = [&](const std::string& out, std::vector<std::string> extra) {
     std::vector<std::string> v = {"train", "--stage", "mask", "--config", "micro", "--data", d / "ds", "--mask-frames", "1",
                                   "--epoch-steps", "4", "--val-windows", "1", "--batch", "2", "--threads", "1",
@@ -481,6 +490,39 @@ TEST_CASE("train: --windows-per-visit decides the windows drawn, is kept in run.
                                          "-o", d / "s", "--steps", "1", "--windows-per-visit", "2"});
   CHECK(sim.code == 2);
   CHECK(yelan::test::contains(sim.err, "--data only"));
+}
+
+TEST_CASE("train: --mask-reuse masks stage 2 as early exit does, is kept in run.json, resumes bit-exactly, needs --mask-weights", "[train][cli]") {
+  yelan::test::CliTempDir d("train-reuse");
+  one_recording_dataset(d / "ds", "0.8s");
+  REQUIRE(yelan::test::run_cli({"weights", "init", "--config", "micro", "-o", d / "m.h5", "--seed", "3"}).code == 0);
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> v = {"train", "--stage", "pose", "--config", "micro", "--data", d / "ds", "--mask-weights", d / "m.h5",
+                                  "--epoch-steps", "3", "--val-windows", "2", "--batch", "2", "--threads", "1",
+                                  "--windows-per-visit", "1", "-o", d / out, "--steps", "3"};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  const auto reuse = run("r", {"--mask-reuse", "3"}), fresh = run("f", {});
+  INFO(reuse.err);
+  REQUIRE(reuse.code == 0);
+  REQUIRE(fresh.code == 0);
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "r/run.json"), "\"mask_reuse\": 3,"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "f/run.json"), "\"mask_reuse\": 0,"));
+  CHECK(yelan::test::slurp(d / "r/final.h5") != yelan::test::slurp(d / "f/final.h5"));  // other inputs, other steps
+  // Stopped at step 1 and resumed: the uninterrupted run; resumed with another N: refused.
+  REQUIRE(run("b", {"--mask-reuse", "3", "--stop-at", "1"}).code == 0);
+  const auto other = run("b", {"--mask-reuse", "2", "--resume"});
+  CHECK(other.code != 0);
+  CHECK(yelan::test::contains(other.err, "--mask-reuse 3"));
+  REQUIRE(run("b", {"--mask-reuse", "3", "--resume"}).code == 0);
+  CHECK(yelan::test::slurp(d / "b/final.h5") == yelan::test::slurp(d / "r/final.h5"));
+  // More than the config's future masks (micro: 3), or no mask net to reuse: usage errors.
+  CHECK(run("big", {"--mask-reuse", "4"}).code == 2);
+  const auto no_net = yelan::test::run_cli({"train", "--stage", "pose", "--config", "micro", "--data", d / "ds", "--mask-reuse", "2",
+                                            "-o", d / "n", "--steps", "1"});
+  CHECK(no_net.code == 2);
+  CHECK(yelan::test::contains(no_net.err, "--mask-weights"));
 }
 
 TEST_CASE("train: the validation windows come from every recording of the val split in turn", "[train][cli]") {

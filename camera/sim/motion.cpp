@@ -96,7 +96,7 @@ BodyPose with_arm_from(const BodyPose& body, const BodyPose& arms, int side) {
   if (side != 0 && side != 1) throw std::invalid_argument("with_arm_from: side must be 0 (right) or 1 (left)");
   const Eigen::Matrix3d turn = chest_frame(body) * chest_frame(arms).transpose();
   BodyPose out = body;
-  for (int point : {kShoulderR, kElbowR, kWristR, kHandTipR})
+  for (int point : kRightArmPoints)
     out.p[point + side] = body.p[kNeck] + turn * (arms.p[point + side] - arms.p[kNeck]);
   return out;
 }

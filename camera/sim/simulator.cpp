@@ -161,7 +161,7 @@ BodyPose Simulator::pose_at(double t_s) const {
   for (int side = 0; side < 2; ++side)
     if (spec_.arm_offset_s[side] != 0) {
       const BodyPose m = with_arm_from(body, motion_->at(motion_time(t_s + spec_.arm_offset_s[side])), side);
-      for (int point : {kShoulderR, kElbowR, kWristR, kHandTipR}) p.p[point + side] = m.p[point + side];
+      for (int point : kRightArmPoints) p.p[point + side] = m.p[point + side];
     }
   return p;
 }

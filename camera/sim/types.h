@@ -43,6 +43,9 @@ struct BodyPose {
   std::array<Vec3, kBodyPointCount> p;  // world frame, mm
 };
 
+// The right arm's points, shoulder to finger tip; the left arm's are each one further.
+inline constexpr std::array<BodyPoint, 4> kRightArmPoints = {kShoulderR, kElbowR, kWristR, kHandTipR};
+
 // DHP19's 13 joints in SPEC order: head, shoulderR, shoulderL, elbowR, elbowL, hipR, hipL,
 // handR, handL, kneeR, kneeL, footR, footL. hand = wrist, foot = ankle.
 inline constexpr int kJointCount = 13;

@@ -54,7 +54,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight",
-                "--windows-per-visit"},
+                "--windows-per-visit", "--mask-reuse"},
                {"--occlusion", "--warp", "--flip", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
@@ -142,6 +142,9 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.dice_weight = float(a.number_or("--dice-weight", 0, 0, 100));
   if (spec.dice_weight != 0 && spec.stage != "mask") throw UsageError("--dice-weight: for --stage mask only");
   spec.mask_weights = a.value_or("--mask-weights", "");
+  spec.mask_reuse = a.int_value_or("--mask-reuse", 0, 0, spec.cfg.n_masks);
+  if (spec.mask_reuse && (spec.stage != "pose" || spec.mask_weights.empty()))
+    throw UsageError("--mask-reuse: for --stage pose behind --mask-weights (stage 1's future masks, reused as yelan run's early exit does)");
   spec.init_weights = a.value_or("--init", "");
   spec.checkpoint_minutes = a.number_or("--checkpoint-minutes", 10, 0, 1e6, true);
   spec.max_minutes = a.number_or("--max-minutes", 0, 0, 1e7, true);  // absent: no limit

@@ -92,7 +92,7 @@ const std::vector<Command>& commands() {
        "                   [--steps 1000] [--batch 8] [--epoch-steps 50] [--lr 1e-3] [--seed N]\n"
        "                   [--lr-schedule cosine|step] [--warmup-steps N] [--history 5] [--val-windows N]\n"
        "                   [--stop-at STEP] [--mask-frames F] [--empty-weight W] [--dice-weight D]\n"
-       "                   [--windows-per-visit 8]\n"
+       "                   [--windows-per-visit 8] [--mask-reuse N]\n"
        "                   [--occlusion] [--warp] [--flip] [--mask-weights W] [--init W] [--val-sim PRESETS]\n"
        "                   [--checkpoint-minutes 10] [--max-minutes M] [--max-cpu-minutes M] [--resume] [--threads T]\n"
        "Windows of S frames at 50 per second stream from the simulator (no disk): TORE read out\n"
@@ -126,7 +126,13 @@ const std::vector<Command>& commands() {
        "loss leaves it out, so it compares across runs.\n"
        "--windows-per-visit N (--data): a batch draws from --batch recordings at once, each\n"
        "serving N windows in increasing time, read in one pass, before the next recording (more\n"
-       "read the history less often; --resume needs the run's own N, kept in run.json).\n",
+       "read the history less often; --resume needs the run's own N, kept in run.json).\n"
+       "--mask-reuse N (pose stage, --mask-weights): each window masked as yelan run's early exit\n"
+       "masks it: stage 1 reran every P frames (P drawn per window from 1..N, N <= the config's\n"
+       "future masks) at a random phase, each frame behind the future mask of the latest run\n"
+       "(up to N-1 frames before the window are read out for it; validation the same, drawn by\n"
+       "the seed). Without it every frame has its own current mask, which yelan run computes\n"
+       "only where early exit reruns stage 1.\n",
        cmd_train, "the CPU trainer (issue 7)"},
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"

@@ -8,8 +8,17 @@
 
 namespace yelan::train {
 
-BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source)
-    : cfg_(cfg), windows_(windows), source_(source != MaskSource::none && !cfg.masked_input ? MaskSource::unmasked : source) {
+MaskReuse draw_mask_reuse(camera::sim::Rng& r, int max_period) {
+  if (max_period < 1) throw std::invalid_argument("mask reuse: the longest period must be >= 1 frame");
+  MaskReuse m;
+  m.period = 1 + r.below(max_period);
+  m.phase = r.below(m.period);
+  return m;
+}
+
+BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source, int lead)
+    : cfg_(cfg), windows_(windows), lead_(lead), source_(source != MaskSource::none && !cfg.masked_input ? MaskSource::unmasked : source) {
+  if (lead < 0) throw std::invalid_argument("a window's lead must be >= 0 frames");
   if (cfg.representation == "tore" && cfg.channels != 6)
     throw std::invalid_argument("config " + cfg.name + ": " + std::to_string(cfg.channels) +
                                 " input channels, but TORE with K = 3 gives 6");
@@ -66,23 +75,29 @@ std::array<std::uint8_t, kJoints> valid_joints(const Batch& b, int f) {
 }
 
 void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occ, const Similarity* warp,
-                       bool flip) {
+                       bool flip, const MaskReuse* reuse) {
   if (used_ >= windows_) throw std::logic_error("batch is full");
-  const int S = cfg_.window, d = cfg_.downscale, H = cfg_.height(), W = cfg_.width();
+  const int S = cfg_.window, d = cfg_.downscale, H = cfg_.height(), W = cfg_.width(), L = lead_;
+  if (reuse && source_ == MaskSource::net &&
+      (reuse->period < 1 || reuse->period > cfg_.n_masks || reuse->phase < 0 || reuse->phase >= reuse->period || reuse->phase > L))
+    throw std::invalid_argument("mask reuse every " + std::to_string(reuse->period) + " frames at phase " +
+                                std::to_string(reuse->phase) + ": needs 1 <= period <= " + std::to_string(cfg_.n_masks) +
+                                " masks, phase < period and <= the window's lead of " + std::to_string(L) + " frames");
+  const bool fresh = source_ == MaskSource::net && !reuse;
   const int sw = w.camera.width, sh = w.camera.height;
   if (sw != cfg_.sensor_width || sh != cfg_.sensor_height)
     throw std::invalid_argument("simulated sensor is " + std::to_string(sw) + "x" + std::to_string(sh) + ", the model expects " +
                                 std::to_string(cfg_.sensor_width) + "x" + std::to_string(cfg_.sensor_height));
-  const int need = S + (source_ == MaskSource::none ? cfg_.n_masks - 1 : 0);
+  const int need = L + S + (source_ == MaskSource::none ? cfg_.n_masks - 1 : 0);
   if (int(w.frames.size()) < need) throw std::invalid_argument("window too short for the model");
   b_.k = {w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy, sw, sh};
   const layers::Act& in = b_.input.act;
   for (int t = 0; t < S; ++t) {
     const int n = used_ * S + t;
-    const auto& f = w.frames[std::size_t(t)];
+    const auto& f = w.frames[std::size_t(L + t)];
     const std::vector<float>& planes = input_planes(cfg_, f, planes_);
     input::downscale_tore(planes, sh, sw, d, in, n);
-    if (source_ == MaskSource::net) input::downscale_tore(planes, sh, sw, d, one_.act, t);
+    if (fresh) input::downscale_tore(planes, sh, sw, d, one_.act, t);
     if (source_ == MaskSource::truth) {
       auto cells = mask_cells(f.mask, sw, d, H, W);
       for (float& c : cells) c = c > 0 ? 1.f : 0.f;  // any human pixel keeps the cell
@@ -133,18 +148,31 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     if (source_ == MaskSource::none) {
       const layers::Act& lab = b_.labels.act;
       for (int k = 0; k < cfg_.n_masks; ++k) {
-        const auto cells = mask_cells(w.frames[std::size_t(t + k)].mask, sw, d, H, W);
+        const auto cells = mask_cells(w.frames[std::size_t(L + t + k)].mask, sw, d, H, W);
         float* p = lab.data + (std::size_t(n) * lab.cb() + k / 16) * lab.pixels() * 16 + k % 16;
         for (std::size_t i = 0; i < lab.pixels(); ++i) p[i * 16] = cells[i] >= 0.5f ? 1.f : 0.f;
       }
     }
   }
-  if (source_ == MaskSource::net) {
+  if (fresh) {
     layers::NoGrad no_grad;
     mask_net.forward(one_.act);
     std::vector<float> keep;
     for (int t = 0; t < S; ++t) {
       input::mask_cut(mask_net.masks(), t, 0, keep, float(cfg_.mask_cut));  // channel 0: the current mask
+      input::apply_mask(in, used_ * S + t, keep);
+    }
+  } else if (source_ == MaskSource::net) {
+    // Stage 1 at frames -phase, -phase + period, ... (at most S runs: one_ holds them).
+    const int P = reuse->period, k = reuse->phase;
+    int runs = 0;
+    for (int r = -k; r < S; r += P)
+      input::downscale_tore(input_planes(cfg_, w.frames[std::size_t(L + r)], planes_), sh, sw, d, one_.act, runs++);
+    layers::NoGrad no_grad;
+    mask_net.forward({one_.act.data, runs, one_.act.c, one_.act.h, one_.act.w});
+    std::vector<float> keep;
+    for (int t = 0; t < S; ++t) {
+      input::mask_cut(mask_net.masks(), (t + k) / P, (t + k) % P, keep, float(cfg_.mask_cut));
       input::apply_mask(in, used_ * S + t, keep);
     }
   }

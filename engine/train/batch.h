@@ -17,6 +17,17 @@
 
 namespace yelan::train {
 
+// Early exit as `yelan run` has it, for a window behind a frozen mask net: stage 1 last ran
+// `phase` frames before the window's first frame and reruns every `period` frames, and
+// frame t reads the future mask of age (t + phase) mod period from the latest run (the
+// window's `phase` frames before it are read out for that run). {1, 0}: every frame its own
+// current mask, as without it.
+struct MaskReuse {
+  int period = 1, phase = 0;
+};
+// Drawn per window: the period uniform in 1..max_period, the phase uniform below it.
+MaskReuse draw_mask_reuse(camera::sim::Rng& r, int max_period);
+
 // none: the mask stage (labels, no masking); unmasked: the pose stage of a config with
 // pose.masked_input false (every other source becomes this one for such configs).
 enum class MaskSource { none, truth, net, unmasked };
@@ -45,21 +56,24 @@ std::array<std::uint8_t, kJoints> valid_joints(const Batch& b, int f);
 
 class BatchBuilder {
  public:
-  BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source);
+  // `lead`: frames each window has before the ones that are inputs (a MaskReuse's phase
+  // reaches at most that far back); 0 for windows that start with their first input.
+  BatchBuilder(const ModelConfig& cfg, int windows, MaskSource source, int lead = 0);
   void clear() { used_ = 0; }
-  // Appends one window (its first cfg.window frames are inputs; the mask stage's labels
-  // use the frames after them too). `mask_net` runs (frozen) for MaskSource::net only.
+  // Appends one window (after `lead` frames, cfg.window frames are inputs; the mask stage's
+  // labels use the frames after them too). `mask_net` runs (frozen) for MaskSource::net only,
+  // on every input frame, or as `reuse` says.
   // `warp`: one similarity for the whole window: input, joints and (mask stage) labels.
   // `flip`: then the whole window mirrored left to right (augment.h), the joints with it and
   // left and right swapped.
   void add(const camera::sim::SimWindow& w, MaskNet& mask_net, camera::sim::Rng* occlusion,
-           const Similarity* warp = nullptr, bool flip = false);
+           const Similarity* warp = nullptr, bool flip = false, const MaskReuse* reuse = nullptr);
   const Batch& batch() const { return b_; }
   MaskSource source() const { return source_; }
 
  private:
   ModelConfig cfg_;
-  int windows_, used_ = 0;
+  int windows_, lead_, used_ = 0;
   MaskSource source_;
   Batch b_;
   layers::ActBuf one_;  // one window's unmasked input, for the frozen mask net

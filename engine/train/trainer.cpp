@@ -224,6 +224,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (spec.dice_weight != 0 && pose_stage) throw std::invalid_argument("the Dice weight is for the mask stage");
   if (!(spec.dice_weight >= 0)) throw std::invalid_argument("the Dice weight must be >= 0");
   if (spec.windows_per_visit < 1) throw std::invalid_argument("windows per visit must be >= 1");
+  if (spec.mask_reuse < 0 || spec.mask_reuse > spec.cfg.n_masks || (spec.mask_reuse > 0 && (!pose_stage || spec.mask_weights.empty())))
+    throw std::invalid_argument("mask reuse: the pose stage behind a frozen mask net (mask weights) only, every 1.." +
+                                std::to_string(spec.cfg.n_masks) + " frames (the config's future masks)");
   if (spec.mask_frames < 0 || (pose_stage && spec.mask_frames > 0))
     throw std::invalid_argument("frames per mask window: the mask stage only, and >= 1");
   // The training windows' shape; validation, weights and the saved config keep cfg's.
@@ -256,6 +259,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
           throw std::invalid_argument(run_json + ": the run was trained " + (was ? "with" : "without") + " --" + key +
                                       " (resume " + (was ? "with" : "without") + " it)");
       }
+      const int reuse = j.contains("mask_reuse") && j["mask_reuse"].is_number_integer() ? j["mask_reuse"].get<int>() : 0;
+      if (reuse != spec.mask_reuse)
+        throw std::invalid_argument(run_json + ": the run was trained with --mask-reuse " + std::to_string(reuse) + ", not " +
+                                    std::to_string(spec.mask_reuse) + " (resume with the run's)");
       train_files = j["train_files"].get<std::vector<std::string>>();
       val_files = j["val_files"].get<std::vector<std::string>>();
       if (train_files.size() != spec.data.size() || val_files.size() != spec.val_data.size())
@@ -272,7 +279,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
                                       {"windows_per_visit", spec.windows_per_visit},
                                       {"occlusion", spec.occlusion},   {"warp", spec.warp},
-                                      {"flip", spec.flip},
+                                      {"flip", spec.flip},             {"mask_reuse", spec.mask_reuse},
                                       {"empty_weight", spec.empty_weight}, {"dice_weight", spec.dice_weight},
                                       {"seed", spec.seed},
                                       {"mask_weights", spec.mask_weights}, {"init_weights", spec.init_weights},
@@ -343,9 +350,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   so.frame_hz = spec.frame_hz;
   so.warmup_s = 0.1;
   // Windows of `frames` read out, plus the mask net's future masks (targets alone).
+  // With --mask-reuse, the frames before them that a stage-1 run may have read.
+  const int lead = spec.mask_reuse > 0 ? spec.mask_reuse - 1 : 0;
   auto set_window = [&](sim::WindowStreamOptions& o, int frames) {
-    o.window = frames + (pose_stage ? 0 : cfg.n_masks - 1);
-    o.tore_frames = frames;
+    o.window = lead + frames + (pose_stage ? 0 : cfg.n_masks - 1);
+    o.tore_frames = lead + frames;
     o.scene_s = o.warmup_s + o.window / o.frame_hz + 1e-6;
   };
   set_window(so, tcfg.window);
@@ -362,7 +371,13 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   stream.seek(std::uint64_t(st.step) * std::uint64_t(spec.batch));
   std::vector<sim::SimSpec> val_scenes = spec.val_scenes.empty() ? spec.scenes : spec.val_scenes;
   const bool frozen_mask = pose_stage && !spec.mask_weights.empty();
-  BatchBuilder builder(tcfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none);
+  BatchBuilder builder(tcfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none, lead);
+  // The reuse of window b of step s (validation window i: kValReuse + i), its own stream.
+  constexpr std::uint64_t kReuseStream = 0x5e05u, kValReuse = 0x5e05'0000'0000ull;
+  auto reuse_of = [&](std::uint64_t stream) {
+    sim::Rng r(spec.seed, stream);
+    return draw_mask_reuse(r, std::max(1, spec.mask_reuse));
+  };
 
   std::ofstream log(log_path, std::ios::app);
   const std::clock_t cpu_start = std::clock();
@@ -404,12 +419,13 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     std::set<std::string> sources;
     for (int i = 0; i < spec.val_windows; i += kPer) {
       const int n = std::min(kPer, spec.val_windows - i);
-      val_batches.push_back(std::make_unique<BatchBuilder>(cfg, n, builder.source()));
+      val_batches.push_back(std::make_unique<BatchBuilder>(cfg, n, builder.source(), lead));
       for (int k = 0; k < n; ++k) {
         sim::SimWindow w;
         vs.next(w);
         sources.insert(w.scene);
-        val_batches.back()->add(w, mask, nullptr);
+        const MaskReuse reuse = reuse_of(kValReuse + std::uint64_t(i + k));
+        val_batches.back()->add(w, mask, nullptr, nullptr, false, spec.mask_reuse > 0 ? &reuse : nullptr);
       }
     }
     if (!val_files.empty())
@@ -497,7 +513,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       const Similarity warp = draw_similarity(wr, cfg.sensor_width, cfg.sensor_height);
       sim::Rng fr(spec.seed, 0xf11bu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       const bool flip = spec.flip && fr.uniform() < 0.5;
-      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr, flip);
+      const MaskReuse reuse = reuse_of(kReuseStream + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
+      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr, flip,
+                  spec.mask_reuse > 0 ? &reuse : nullptr);
     }
     const double built = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     data_s += built;

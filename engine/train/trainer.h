@@ -61,6 +61,10 @@ struct TrainSpec {
   float dice_weight = 0;            // mask stage: the soft Dice term's weight (mask_loss); the
                                     // validation loss leaves it out, comparable across runs
   std::string mask_weights;         // pose stage: frozen mask net; empty: the true mask
+  // pose stage behind mask_weights: > 0, each window masked as early exit in `yelan run`
+  // masks it, stage 1 rerun every 1..mask_reuse frames (drawn per window, batch.h
+  // MaskReuse), the frames between reading its future masks; 0: a fresh mask every frame.
+  int mask_reuse = 0;
   std::string init_weights;         // start from these instead of a random initialisation
   std::string out_dir;
   bool resume = false;
