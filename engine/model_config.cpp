@@ -94,6 +94,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     c.depth_forearms = get_bool_or(r, where + ".run", "depth_forearms", true);
     if (r.contains("depth_tau_s")) c.depth_tau_s = get_num(r, where + ".run", "depth_tau_s");
     if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");
+    if (r.contains("mask_cut_reused")) c.mask_cut_reused = get_num(r, where + ".run", "mask_cut_reused");
     if (r.contains("idle_recheck_s")) c.idle_recheck_s = get_num(r, where + ".run", "idle_recheck_s");
     if (r.contains("presence")) {
       const json& pr = section(r, "presence", where + ".run");
@@ -125,6 +126,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.run_beta >= 0 && c.run_beta <= 2, "run.beta must be in 0..2 (above 1: stage 1 on every tick)"},
       {c.depth_scale > 0 && c.depth_scale <= 1000, "run.depth_scale must be in (0, 1000]"},
       {c.mask_cut > 0 && c.mask_cut < 1, "run.mask_cut must be in (0, 1)"},
+      {c.reused_mask_cut() > 0 && c.reused_mask_cut() < 1, "run.mask_cut_reused must be in (0, 1)"},
       {std::isfinite(c.presence_a) && std::isfinite(c.presence_b) && c.presence_a >= 0,
        "run.presence: a must be finite and >= 0, b finite"},
       {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},

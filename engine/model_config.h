@@ -2,6 +2,7 @@
 // `config` attribute). Mirrors weights_tools/reference/config.py: same keys, same checks,
 // same channel rounding (round half to even, never below 1).
 #pragma once
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -56,12 +57,18 @@ struct ModelConfig {
   //   run.mask_cut: stage 1's masks are the pixels whose sigmoid exceeds it (default 0.1, a
   //   cut that keeps the dancer for a masked stage 2; `yelan calibrate --choose-mask-cut`
   //   picks the one of best IoU against the true masks).
+  //   run.mask_cut_reused (optional, default run.mask_cut): the cut of the future masks that
+  //   early exit reuses between stage 1's runs (stage 2's input only; presence and early
+  //   exit read every mask at run.mask_cut). A future mask predicted up to 0.3 s before is
+  //   a guess at where the limbs will be: a lower cut keeps the events near its edge.
   //   run.idle_recheck_s (optional, default 0): while stage 1's last run saw nobody, it runs
   //   again once this many seconds have passed (0: on every tick; at most the future masks'
   //   span, n_masks / 50 s), so an empty room costs a fraction of stage 1 while a dancer who
   //   walks in is seen at most this much later.
   double run_beta = 0.99;
   double mask_cut = 0.1;
+  std::optional<double> mask_cut_reused;  // absent: mask_cut
+  double reused_mask_cut() const { return mask_cut_reused.value_or(mask_cut); }
   double depth_scale = 1;
   double depth_tau_s = 0;
   double idle_recheck_s = 0;

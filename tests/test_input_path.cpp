@@ -118,6 +118,9 @@ TEST_CASE("mask reuse: each frame behind the future mask of stage 1's latest run
     for (std::size_t i = 0; i < p.size(); ++i) p[i] = 1 / (1 + std::exp(-m.data[i * 16 + 1]));  // channel 1
     std::nth_element(p.begin(), p.begin() + p.size() / 2, p.end());
     cfg.mask_cut = p[p.size() / 2];
+    // And the reused future masks at their own cut, lower (run.mask_cut_reused).
+    std::nth_element(p.begin(), p.begin() + p.size() / 4, p.end());
+    cfg.mask_cut_reused = p[p.size() / 4];
   }
   std::vector<float> keep, fresh_keep;
   int ages_seen = 0;
@@ -129,7 +132,8 @@ TEST_CASE("mask reuse: each frame behind the future mask of stage 1's latest run
     builder.add(win, fx.nets->mask, nullptr, nullptr, false, &reuse);
     const yelan::layers::Act& got = builder.batch().input.act;
     per_frame = std::size_t(got.cb()) * got.pixels() * 16;
-    // By hand: stage 1 on frame t - age alone, its mask `age` cut where the config cuts.
+    // By hand: stage 1 on frame t - age alone, its mask `age` cut where the config cuts
+    // (the current mask at run.mask_cut, a future one at run.mask_cut_reused).
     for (int t = 0; t < S; ++t) {
       const int age = (t + reuse.phase) % reuse.period;
       INFO("period " << reuse.period << ", phase " << reuse.phase << ": frame " << t << ", mask age " << age);
@@ -137,7 +141,7 @@ TEST_CASE("mask reuse: each frame behind the future mask of stage 1's latest run
       yelan::input::downscale_tore(f.tore, sh, sw, d, one.act, 0);
       yelan::layers::NoGrad no_grad;
       fx.nets->mask.forward(one.act);
-      yelan::input::mask_cut(fx.nets->mask.masks(), 0, age, keep, float(cfg.mask_cut));
+      yelan::input::mask_cut(fx.nets->mask.masks(), 0, age, keep, float(age ? cfg.reused_mask_cut() : cfg.mask_cut));
       yelan::input::mask_cut(fx.nets->mask.masks(), 0, 0, fresh_keep, float(cfg.mask_cut));
       if (age > 0) some_mask_differs |= keep != fresh_keep;
       ages_seen |= 1 << age;

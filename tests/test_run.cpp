@@ -288,6 +288,69 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, no p
   CHECK(overridden.person_missed == 0);
 }
 
+TEST_CASE("run: run.mask_cut_reused cuts the future masks stage 2 reads between stage 1's runs, and nothing else", "[run][cli]") {
+  // The same micro networks (one seed) under three run settings: a reused mask cut low,
+  // the same as run.mask_cut given explicitly, and absent. Stage 1 reruns only when its
+  // future masks run out (beta 0), a person always (presence b 30).
+  yelan::test::CliTempDir d("run-reused-cut");
+  std::ifstream micro(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
+  std::stringstream ss;
+  ss << micro.rdbuf();
+  const std::string cfg = ss.str();
+  const auto brace = cfg.rfind('}');
+  for (const auto& [name, extra] : std::vector<std::pair<std::string, std::string>>{
+           {"plain", ""}, {"same", ", \"mask_cut_reused\": 0.5"}, {"low", ", \"mask_cut_reused\": 0.02"}}) {
+    std::ofstream(d / (name + ".json")) << cfg.substr(0, brace) << ", \"run\": {\"presence\": {\"a\": 0, \"b\": 30}, \"mask_cut\": 0.5"
+                                        << extra << "}}\n";
+    REQUIRE(run_cli({"weights", "init", "--config", d / (name + ".json"), "--seed", "2", "-o", d / (name + ".h5")}).code == 0);
+  }
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.3s", "-o", d / "r.yelan.h5"}).code == 0);
+  struct Tick {
+    bool ran;
+    float share;
+    double kept;
+    std::array<float, 3> head;
+  };
+  auto ticks = [&](const std::string& name) {
+    yelan::run::RunOptions o;
+    o.beta = 0;
+    yelan::run::PosePipeline pipe(d / (name + ".h5"), 346, 260, o);
+    std::vector<Tick> out;
+    yelan::run::run_file(pipe, d / "r.yelan.h5", 300000, [&](const yelan::run::Pose& p) {
+      double kept = 0;
+      for (float v : pipe.last_mask()) kept += v;
+      out.push_back({p.mask_ran, p.mask_share, kept, p.joints_mm[0]});
+    });
+    return out;
+  };
+  const auto plain = ticks("plain"), same = ticks("same"), low = ticks("low");
+  REQUIRE(plain.size() >= 10);
+  REQUIRE(low.size() == plain.size());
+  REQUIRE(same.size() == plain.size());
+  int reused = 0, wider = 0;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    INFO("tick " << i);
+    CHECK(same[i].head == plain[i].head);
+    CHECK(same[i].kept == plain[i].kept);
+    // Early exit and presence read the masks at run.mask_cut whatever the reused cut.
+    CHECK(low[i].ran == plain[i].ran);
+    CHECK(low[i].share == plain[i].share);
+    if (plain[i].ran) {
+      CHECK(low[i].kept == plain[i].kept);
+    } else {
+      ++reused;
+      CHECK(low[i].kept >= plain[i].kept);  // a lower cut keeps at least as much
+      wider += low[i].kept > plain[i].kept;
+    }
+  }
+  CHECK(reused >= 5);
+  CHECK(wider >= 1);
+  std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"mask_cut_reused\": 1}}\n";
+  const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
+  CHECK(bad.code == 2);
+  CHECK(contains(bad.err, "run.mask_cut_reused must be in (0, 1)"));
+}
+
 TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 2 reads the whole TORE", "[run][cli]") {
   // Three configs of the same networks: stage 1 masks stage 2's input (the default), stage 1
   // decides presence only, no stage 1. The same seed gives the same tensors to all three.

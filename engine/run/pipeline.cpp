@@ -117,6 +117,10 @@ struct PosePipeline::Impl {
   std::int64_t mask_t = 0;
   std::int64_t idle_recheck_us = 0;
   std::vector<std::vector<float>> masks;  // N binarised masks, H x W
+  // Stage 2's masks where run.mask_cut_reused differs: the future ones (1..N-1) at that cut
+  // (entry 0 unused), with their boxes; empty: stage 2 reads `masks`.
+  std::vector<std::vector<float>> reused;
+  std::vector<PoseNet::CropBox> reused_boxes;
   std::vector<float> scores;
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
   int in_use = 0;
@@ -243,6 +247,10 @@ struct PosePipeline::Impl {
     return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
   }
 
+  const std::vector<float>& stage2_mask(int use) const {
+    return use > 0 && !reused.empty() ? reused[std::size_t(use)] : masks[std::size_t(use)];
+  }
+
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
     if (b.empty()) return b;
     return {b.x0 - crop, b.y0 - crop, b.x1 + crop, b.y1 + crop};
@@ -322,6 +330,15 @@ struct PosePipeline::Impl {
         q.blob = largest_blob_share(mc, m.w, m.h);
         q.score = scores[std::size_t(c)];
       }
+      reused.clear();
+      if (cfg.reused_mask_cut() != cfg.mask_cut) {
+        reused.resize(std::size_t(cfg.n_masks));
+        reused_boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
+        for (int c = 1; c < cfg.n_masks; ++c) {
+          input::mask_cut(m, 0, c, reused[std::size_t(c)], float(cfg.reused_mask_cut()));
+          reused_boxes[std::size_t(c)] = bounding_box(reused[std::size_t(c)], m.w, m.h);
+        }
+      }
       mask_t = T;
       have_masks = true;
       use = 0;
@@ -336,12 +353,13 @@ struct PosePipeline::Impl {
     const std::size_t per_frame = std::size_t(unmasked.act.cb()) * unmasked.act.pixels() * 16;
     in_use = use;
     std::copy_n(unmasked.act.data, per_frame, dst.data + std::size_t(n) * per_frame);
-    if (cfg.masked_input) input::apply_mask(dst, n, masks[std::size_t(use)]);
+    if (cfg.masked_input) input::apply_mask(dst, n, stage2_mask(use));
     last_in = {dst.data + std::size_t(n) * per_frame, 1, dst.c, dst.h, dst.w};
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;
     slot_cues[std::size_t(slot)] = cfg.runs_stage1() ? cues[std::size_t(use)] : Cues{1, 1, 1, 1};
-    const PoseNet::CropBox box = cfg.masked_input ? grown(boxes[std::size_t(use)]) : PoseNet::CropBox{};
+    const PoseNet::CropBox box =
+        !cfg.masked_input ? PoseNet::CropBox{} : grown(use > 0 && !reused.empty() ? reused_boxes[std::size_t(use)] : boxes[std::size_t(use)]);
     int ready = 0;
     if (!cfg.bidirectional) {
       if (slot == 0) nets.pose.reset_stream();  // windows of S ticks, as trained
@@ -464,7 +482,7 @@ double DepthSmoother::update(double depth_mm, std::int64_t t_us) {
 const std::vector<float>& PosePipeline::last_tore() const { return impl_->vol; }
 const std::vector<float>& PosePipeline::last_mask() const {
   static const std::vector<float> none;
-  return impl_->masks.empty() ? none : impl_->masks[std::size_t(std::max(0, impl_->in_use))];
+  return impl_->masks.empty() ? none : impl_->stage2_mask(std::max(0, impl_->in_use));
 }
 const layers::Act& PosePipeline::last_input() const { return impl_->last_in; }
 const std::vector<std::vector<float>>& PosePipeline::stored_masks() const { return impl_->masks; }

@@ -102,7 +102,8 @@ class PosePipeline {
   double beta() const;  // the early-exit threshold in use
   bool causal() const;
   // For pictures, valid inside the pose callback: the TORE volume of the latest tick (2K x
-  // H x W at the sensor's size), the mask in use (the model's input size) and its downscale.
+  // H x W at the sensor's size), the mask stage 2 read (the model's input size; a reused
+  // future mask at run.mask_cut_reused) and its downscale.
   const std::vector<float>& last_tore() const;
   const std::vector<float>& last_mask() const;
   // Stage 1's latest run: its N masks (the current frame and N-1 future ones, 20 ms apart;

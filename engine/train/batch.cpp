@@ -172,7 +172,8 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     mask_net.forward({one_.act.data, runs, one_.act.c, one_.act.h, one_.act.w});
     std::vector<float> keep;
     for (int t = 0; t < S; ++t) {
-      input::mask_cut(mask_net.masks(), (t + k) / P, (t + k) % P, keep, float(cfg_.mask_cut));
+      const int age = (t + k) % P;  // as yelan run: a reused future mask at run.mask_cut_reused
+      input::mask_cut(mask_net.masks(), (t + k) / P, age, keep, float(age ? cfg_.reused_mask_cut() : cfg_.mask_cut));
       input::apply_mask(in, used_ * S + t, keep);
     }
   }

@@ -20,8 +20,8 @@ namespace yelan::train {
 // Early exit as `yelan run` has it, for a window behind a frozen mask net: stage 1 last ran
 // `phase` frames before the window's first frame and reruns every `period` frames, and
 // frame t reads the future mask of age (t + phase) mod period from the latest run (the
-// window's `phase` frames before it are read out for that run). {1, 0}: every frame its own
-// current mask, as without it.
+// window's `phase` frames before it are read out for that run), cut at run.mask_cut_reused
+// where older than the run. {1, 0}: every frame its own current mask, as without it.
 struct MaskReuse {
   int period = 1, phase = 0;
 };

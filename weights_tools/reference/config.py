@@ -125,6 +125,8 @@ def config_from_dict(d, where="config"):
     beta = _get(run, where + ".run", "beta", float, 0.99)
     depth_scale = _get(run, where + ".run", "depth_scale", float, 1.0)
     mask_cut = _get(run, where + ".run", "mask_cut", float, 0.1)
+    mask_cut_reused = _get(run, where + ".run", "mask_cut_reused", float, mask_cut)
+    idle_recheck_s = _get(run, where + ".run", "idle_recheck_s", float, 0.0)
     pa, pb = 3.0, 13.8
     if "presence" in run:
         if not isinstance(run["presence"], dict):
@@ -135,6 +137,8 @@ def config_from_dict(d, where="config"):
         (0 <= beta <= 2, "run.beta must be in 0..2 (above 1: stage 1 on every tick)"),
         (0 < depth_scale <= 1000, "run.depth_scale must be in (0, 1000]"),
         (0 < mask_cut < 1, "run.mask_cut must be in (0, 1)"),
+        (0 < mask_cut_reused < 1, "run.mask_cut_reused must be in (0, 1)"),
+        (0 <= idle_recheck_s <= 1, "run.idle_recheck_s must lie in 0..1 (seconds)"),
         (math.isfinite(pa) and math.isfinite(pb) and pa >= 0, "run.presence: a must be finite and >= 0, b finite"),
         (cfg.channels >= 1, "input.channels must be >= 1"),
         (cfg.downscale >= 1, "input.downscale must be >= 1"),

@@ -47,7 +47,7 @@ def _cfg(**changes):
         d = json.load(f)
     for path, v in changes.items():
         sec, key = path.split(".")
-        d[sec][key] = v
+        d.setdefault(sec, {})[key] = v
     return config_from_dict(d)
 
 
@@ -126,6 +126,14 @@ class ParameterCounts(unittest.TestCase):
             _cfg(**{"mask.role": "presence"})
         with self.assertRaisesRegex(ConfigError, "mask.role must be mask, presence or none"):
             _cfg(**{"pose.masked_input": False, "mask.role": "crop"})
+
+    def test_run_settings_are_checked_as_the_cpp_reader_checks_them(self):
+        from weights_tools.reference.config import ConfigError
+        _cfg(**{"run.mask_cut": 0.5, "run.mask_cut_reused": 0.2, "run.idle_recheck_s": 0.06})
+        with self.assertRaisesRegex(ConfigError, r"run.mask_cut_reused must be in \(0, 1\)"):
+            _cfg(**{"run.mask_cut_reused": 1.0})
+        with self.assertRaisesRegex(ConfigError, r"run.idle_recheck_s must lie in 0..1"):
+            _cfg(**{"run.idle_recheck_s": -0.5})
 
     def test_stored_manifests_are_up_to_date(self):
         mm = _tools()[6]
