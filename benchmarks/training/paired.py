@@ -2,12 +2,18 @@
 """Two pose nets compared recording by recording on the same frames.
 
     paired.py A.json B.json [A2.json B2.json ...]
+    paired.py --poses [--root | --true-depth] A.csv B.csv [A2.csv B2.csv ...]
 
 Each pair is two `yelan eval --json` files of the same recordings (their
-by_condition.scene rows); the differences B - A of all pairs are pooled. Prints
-their mean with its standard error and on how many recordings B is better:
-a paired difference is far less noisy than the two means side by side.
+by_condition.scene rows), or with --poses two `yelan eval --run --poses` files
+(the deployed path's poses: each recording's MPJPE over its poses that say
+"person", as the pipeline placed them, --root after aligning the hip centres,
+--true-depth scaled to the true head depth, the paper protocol). The
+differences B - A of all pairs are pooled. Prints their mean with its standard
+error and on how many recordings B is better: a paired difference is far less
+noisy than the two means side by side.
 """
+import csv
 import json
 import math
 import sys
@@ -17,12 +23,47 @@ def scene_mpjpe(path):
     return {k: v["mpjpe_mm"] for k, v in json.load(open(path))["by_condition"]["scene"].items()}
 
 
+def poses_mpjpe(path, mode):
+    """Per recording, the mean distance over all scored joints (as yelan eval --run pools them)."""
+    sums = {}
+    with open(path, newline="") as f:
+        for row in csv.DictReader(f):
+            if row["dancer"] != "1" or row["person"] != "1":
+                continue
+            depth, true_depth = float(row["head_depth_mm"]), float(row["true_head_depth_mm"])
+            if not (depth > 0 and true_depth > 1):
+                continue
+            k = true_depth / depth if mode == "true-depth" else 1.0
+            pred = [[k * float(row[f"j{j}_{c}"]) for c in "xyz"] for j in range(13)]
+            true = [[float(row[f"true_j{j}_{c}"]) for c in "xyz"] for j in range(13)]
+            valid = [row[f"valid{j}"] == "1" for j in range(13)]
+            if mode == "root":
+                if not (valid[5] and valid[6]):
+                    continue
+                rp = [(pred[5][c] + pred[6][c]) / 2 for c in range(3)]
+                rt = [(true[5][c] + true[6][c]) / 2 for c in range(3)]
+                pred = [[p[c] - rp[c] for c in range(3)] for p in pred]
+                true = [[t[c] - rt[c] for c in range(3)] for t in true]
+            s = sums.setdefault(row["source"], [0.0, 0])
+            for j in range(13):
+                if valid[j]:
+                    s[0] += math.dist(pred[j], true[j])
+                    s[1] += 1
+    return {k: s / n for k, (s, n) in sums.items() if n}
+
+
 def main(argv):
+    mode = None
+    if argv and argv[0] == "--poses":
+        mode, argv = "deployed", argv[1:]
+        if argv and argv[0] in ("--root", "--true-depth"):
+            mode, argv = argv[0][2:], argv[1:]
     if len(argv) < 2 or len(argv) % 2:
         sys.exit(__doc__)
+    read = scene_mpjpe if mode is None else lambda p: poses_mpjpe(p, mode)
     diffs = []
     for a, b in zip(argv[0::2], argv[1::2]):
-        A, B = scene_mpjpe(a), scene_mpjpe(b)
+        A, B = read(a), read(b)
         missing = sorted(set(A) ^ set(B))
         if missing:
             sys.exit(f"{a} and {b} score different recordings, e.g. {missing[0]}")

@@ -3,6 +3,7 @@ JSON files whose differences are known by hand. Standard library only.
 
 Run: /usr/bin/python3 -m unittest discover -s weights_tools/tests"""
 import json
+import math
 import os
 import subprocess
 import sys
@@ -16,6 +17,26 @@ PAIRED = os.path.join(ROOT, "benchmarks", "training", "paired.py")
 def write_eval(path, scenes):
     with open(path, "w") as f:
         json.dump({"by_condition": {"scene": {k: {"mpjpe_mm": v, "frames": 96} for k, v in scenes.items()}}}, f)
+
+
+def write_poses(path, rows):
+    """rows: (source, person, pred 13x3 or None, truth 13x3, head_depth) as yelan eval --run --poses writes them."""
+    head = ["source", "t_us", "dancer", "person", "confidence", "mask_ran", "head_depth_mm", "true_head_depth_mm"]
+    head += [f"{w}j{j}_{c}" for w in ("", "true_") for j in range(13) for c in "xyz"] + [f"valid{j}" for j in range(13)]
+    with open(path, "w") as f:
+        f.write(",".join(head) + "\n")
+        for t, (source, person, pred, truth, depth) in enumerate(rows):
+            cells = [source, str(t * 20000), "1", str(person), "0.9", "1", str(depth), str(truth[0][2])]
+            cells += [str(v) if person else "" for p in (pred or [[0, 0, 0]] * 13) for v in p]
+            cells += [str(v) for p in truth for v in p] + ["1"] * 13
+            f.write(",".join(cells) + "\n")
+
+
+TRUTH = [[10.0 * j, 5.0 * j, 3000.0 + j] for j in range(13)]
+
+
+def moved(pose, d):
+    return [[p[c] + d[c] for c in range(3)] for p in pose]
 
 
 class PairedTest(unittest.TestCase):
@@ -43,6 +64,33 @@ class PairedTest(unittest.TestCase):
             r = self.run_paired(a, b)
             self.assertNotEqual(r.returncode, 0)
             self.assertIn("score different recordings", r.stderr)
+
+    def test_deployed_poses_as_placed_root_aligned_and_at_the_true_depth(self):
+        with tempfile.TemporaryDirectory() as d:
+            a, b = os.path.join(d, "a.csv"), os.path.join(d, "b.csv")
+            z = TRUTH[0][2]
+            # A: every joint 10 mm off in x, its head depth right; B: 5 mm off (0, 4, 3), and
+            # on the second recording twice as far in every coordinate with its head depth
+            # doubled (exact at the true depth). A pose saying nobody is left out.
+            write_poses(a, [("r1", 1, moved(TRUTH, (10, 0, 0)), TRUTH, z), ("r1", 0, None, TRUTH, -1),
+                            ("r2", 1, moved(TRUTH, (10, 0, 0)), TRUTH, z)])
+            write_poses(b, [("r1", 1, moved(TRUTH, (0, 4, 3)), TRUTH, z), ("r1", 0, None, TRUTH, -1),
+                            ("r2", 1, [[2 * v for v in p] for p in TRUTH], TRUTH, 2 * z)])
+            r = self.run_paired("--poses", "--true-depth", a, b)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("2 recordings: B - A = -7.5 +- 2.5 mm", r.stdout)
+            self.assertIn("B better on 2", r.stdout)
+            # Root-aligned, a constant offset is no error: r1 0 - 0; r2 B doubled about the hips
+            # is off by each joint's distance from them.
+            root = [(TRUTH[5][c] + TRUTH[6][c]) / 2 for c in range(3)]
+            r2 = sum(math.dist(p, root) for p in TRUTH) / 13
+            r = self.run_paired("--poses", "--root", a, b)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn(f"2 recordings: B - A = {r2 / 2:+.1f} +- {r2 / 2:.1f} mm", r.stdout)
+            self.assertIn("B better on 0", r.stdout)
+            r = self.run_paired("--poses", a, b)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("B better on 1", r.stdout)  # r1 -5; r2 a dancer twice as far is far worse
 
     def test_odd_argument_count_prints_usage(self):
         r = self.run_paired("only-one.json")
