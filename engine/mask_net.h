@@ -74,12 +74,12 @@ class MaskNet : public layers::Module<MaskNet> {
   std::array<layers::Act, kLevels> pooled_, upt_, padded_, cat_, upo_;
   std::array<int, kLevels> pad_top_{}, pad_left_{};
   layers::ActBuf pooled_buf_[kLevels], upt_buf_[kLevels], padded_buf_[kLevels], cat_buf_[kLevels];
-  layers::ActBuf masks_buf_, s1_buf_, s2_buf_, gap_buf_;
-  layers::Act masks_, s1_, s2_, gap_;
+  layers::ActBuf masks_buf_, top_gap_buf_, s1_buf_, gap_buf_;
+  layers::Act masks_, top_gap_, s1_, gap_;  // the score head: pooled top, then its two 1x1 convolutions
   std::vector<float> logits_, scores_;
   // backward only, each dL/d the activation it is named after
   layers::ActBuf d_top_;                      // the last up block's output (what outc and the score head read)
-  layers::ActBuf d_gap_, d_s2_, d_s1_, d_top_score_;  // the score head; d_top_score_ is its share of d_top_
+  layers::ActBuf d_gap_, d_s1_, d_top_gap_, d_top_score_;  // the score head; d_top_score_ is its share of d_top_
   layers::ActBuf d_cat_, d_padded_, d_upt_;  // one up level at a time
   layers::ActBuf d_pooled_;                  // one down level at a time
   layers::ActBuf d_skip_[kLevels];           // x_[k] as a skip, held until the down path reaches level k

@@ -1020,11 +1020,12 @@ TEST_CASE("run: the deployed head depth is averaged over the ticks with a person
     CHECK_FALSE(nobody.poses[i].pose.person);
     CHECK(nobody.poses[i].pose.head_depth_mm == Approx(unsmoothed.poses[i].pose.head_depth_mm).epsilon(1e-12));
   }
-  // The CSV of `eval --run --poses`: a header of 99 columns, one row a pose, no joints for a
+  // The CSV of `eval --run --poses`: a header of 100 columns, one row a pose, no joints for a
   // pose without a person but its label all the same.
   const auto rows = csv_rows(yelan::run::scored_poses_csv(nobody.poses));
   REQUIRE(rows.size() == nobody.poses.size() + 1);
-  CHECK(rows[0].size() == 99);
+  CHECK(rows[0].size() == 100);
+  CHECK(rows[0][99] == "mask_age");
   CHECK(rows[0][6] == "head_depth_mm");
   CHECK(rows[0][8] == "j0_x");
   CHECK(rows[0][47] == "true_j0_x");
@@ -1034,6 +1035,24 @@ TEST_CASE("run: the deployed head depth is averaged over the ticks with a person
   CHECK(rows[1][8].empty());
   CHECK(std::stod(rows[1][7]) == Approx(nobody.poses[0].truth[0][2]).epsilon(1e-6));
   CHECK(std::stod(rows[1][49]) == Approx(nobody.poses[0].truth[0][2]).epsilon(1e-6));
+  // Early exit on every tick it can (beta 0): each pose names the future mask stage 2 read,
+  // one 20 ms mask further per tick at 50/s, 0 where stage 1 ran; the CSV says the same.
+  o.beta = 0;
+  o.presence_ab = std::array<double, 2>{0, 30};
+  const auto reused = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
+  const auto reused_rows = csv_rows(yelan::run::scored_poses_csv(reused.poses));
+  REQUIRE(reused_rows.size() == reused.poses.size() + 1);
+  int aged = 0, prev_age = -1;
+  for (std::size_t i = 0; i < reused.poses.size(); ++i) {
+    const auto& p = reused.poses[i].pose;
+    CHECK(reused_rows[i + 1][99] == std::to_string(p.mask_age));
+    if (p.stale) continue;
+    if (p.mask_ran) CHECK(p.mask_age == 0);
+    else if (prev_age >= 0) CHECK(p.mask_age == prev_age + 1);  // the kept poses start after the warm-up
+    prev_age = p.mask_age;
+    aged += p.mask_age > 0;
+  }
+  CHECK(aged > int(reused.poses.size()) / 2);
   // --poses is the deployed path's: refused without --run, before any work.
   const auto refused = run_cli({"eval", "--weights", d / "w.h5", "--sim", "test", "--poses", d / "p.csv"});
   CHECK(refused.code == 2);

@@ -469,7 +469,11 @@ case "$what" in
       fi
       mkdir -p "models/campaign/$run"
       cp "$RUNS/$run/run.json" "$RUNS/$run/log.csv" "models/campaign/$run/"
-      [ -f "$RUNS/$run.out" ] && cp "$RUNS/$run.out" "models/campaign/$run/train.out"
+      # The same for its console output: a resumed run's .out on a new machine holds only this session's part.
+      if [ -f "$RUNS/$run.out" ] && { [ ! -f "models/campaign/$run/train.out" ] ||
+         [ "$(wc -l < "$RUNS/$run.out")" -ge "$(wc -l < "models/campaign/$run/train.out")" ]; }; then
+        cp "$RUNS/$run.out" "models/campaign/$run/train.out"
+      fi
       size=$(( $(stat -c %s "$RUNS/$run/checkpoint.h5") + $(stat -c %s "$RUNS/$run/checkpoint.state") ))
       # The quarter-width pose net's is 11 MiB (its Adam moments are two thirds of it): kept,
       # since a lost checkpoint cost 2.2 CPU-hours once (pose-small-looks).

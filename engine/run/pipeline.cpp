@@ -130,6 +130,7 @@ struct PosePipeline::Impl {
   int slot = 0;
   std::vector<std::int64_t> slot_t;
   std::vector<bool> slot_mask_ran;
+  std::vector<int> slot_mask_age;
   // What each stored mask says of presence, and what each window slot's mask said.
   struct Cues {
     float share = 0, mean_p = 0, blob = 0, score = 0;
@@ -163,6 +164,7 @@ struct PosePipeline::Impl {
     else nets.pose.set_streaming(true);
     slot_t.resize(std::size_t(cfg.window));
     slot_mask_ran.resize(std::size_t(cfg.window));
+    slot_mask_age.resize(std::size_t(cfg.window));
     slot_cues.resize(std::size_t(cfg.window));
     beta = o.beta >= 0 ? o.beta : cfg.run_beta;
     if (o.presence_ab) nets.cfg.presence_a = (*o.presence_ab)[0], nets.cfg.presence_b = (*o.presence_ab)[1];
@@ -205,6 +207,7 @@ struct PosePipeline::Impl {
       Pose p;
       p.t_us = slot_t[std::size_t(f)];
       p.mask_ran = slot_mask_ran[std::size_t(f)];
+      p.mask_age = slot_mask_age[std::size_t(f)];
       set_presence(p, slot_cues[std::size_t(f)]);
       double z = opt.fixed_depth_mm;
       if (!(z > 0)) {
@@ -247,8 +250,13 @@ struct PosePipeline::Impl {
     return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
   }
 
+  // What stage 2 reads behind mask `use`: a reused future one at run.mask_cut_reused, and its box.
+  bool reads_reused(int use) const { return use > 0 && !reused.empty(); }
   const std::vector<float>& stage2_mask(int use) const {
-    return use > 0 && !reused.empty() ? reused[std::size_t(use)] : masks[std::size_t(use)];
+    return reads_reused(use) ? reused[std::size_t(use)] : masks[std::size_t(use)];
+  }
+  const PoseNet::CropBox& stage2_box(int use) const {
+    return reads_reused(use) ? reused_boxes[std::size_t(use)] : boxes[std::size_t(use)];
   }
 
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
@@ -357,15 +365,17 @@ struct PosePipeline::Impl {
     last_in = {dst.data + std::size_t(n) * per_frame, 1, dst.c, dst.h, dst.w};
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;
+    slot_mask_age[std::size_t(slot)] = cfg.runs_stage1() ? use : 0;
     slot_cues[std::size_t(slot)] = cfg.runs_stage1() ? cues[std::size_t(use)] : Cues{1, 1, 1, 1};
     const PoseNet::CropBox box =
-        !cfg.masked_input ? PoseNet::CropBox{} : grown(use > 0 && !reused.empty() ? reused_boxes[std::size_t(use)] : boxes[std::size_t(use)]);
+        !cfg.masked_input ? PoseNet::CropBox{} : grown(stage2_box(use));
     int ready = 0;
     if (!cfg.bidirectional) {
       if (slot == 0) nets.pose.reset_stream();  // windows of S ticks, as trained
       run_stage2(frame.act, 1, box);
       slot_t[0] = T;
       slot_mask_ran[0] = run_mask;
+      slot_mask_age[0] = slot_mask_age[std::size_t(slot)];
       slot_cues[0] = slot_cues[std::size_t(slot)];
       slot = (slot + 1) % cfg.window;
       ready = 1;

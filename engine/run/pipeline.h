@@ -65,6 +65,9 @@ struct Pose {
   float mask_score = 0;       // its score for the mask in use (predicted 1 - mean |mask error|)
   float pose_confidence = 0;  // mean over joints of the last stage's xy peak probability
   bool mask_ran = false, stale = false;
+  // Which of stage 1's masks stage 2 read: 0 the current frame's (stage 1 ran on this tick,
+  // or is held while nobody is there), k a future mask predicted k x 20 ms ahead (early exit).
+  int mask_age = 0;
   double head_depth_mm = 0;
 };
 

@@ -209,7 +209,7 @@ std::string scored_poses_csv(const std::vector<ScoredPose>& poses) {
     for (int j = 0; j < 13; ++j)
       for (const char* c : {"x", "y", "z"}) o << ',' << what << 'j' << j << '_' << c;
   for (int j = 0; j < 13; ++j) o << ",valid" << j;
-  o << '\n';
+  o << ",mask_age\n";
   o << std::setprecision(7);
   for (const ScoredPose& s : poses) {
     const Pose& p = s.pose;
@@ -227,7 +227,7 @@ std::string scored_poses_csv(const std::vector<ScoredPose>& poses) {
         if (s.dancer) o << v;
       }
     for (std::uint8_t v : s.valid) o << ',' << int(v);
-    o << '\n';
+    o << ',' << p.mask_age << '\n';
   }
   return o.str();
 }

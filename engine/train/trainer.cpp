@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -374,9 +375,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   BatchBuilder builder(tcfg, spec.batch, pose_stage ? (frozen_mask ? MaskSource::net : MaskSource::truth) : MaskSource::none, lead);
   // The reuse of window b of step s (validation window i: kValReuse + i), its own stream.
   constexpr std::uint64_t kReuseStream = 0x5e05u, kValReuse = 0x5e05'0000'0000ull;
-  auto reuse_of = [&](std::uint64_t stream) {
+  // None without --mask-reuse: the windows are masked fresh.
+  auto reuse_of = [&](std::uint64_t stream) -> std::optional<MaskReuse> {
+    if (spec.mask_reuse <= 0) return std::nullopt;
     sim::Rng r(spec.seed, stream);
-    return draw_mask_reuse(r, std::max(1, spec.mask_reuse));
+    return draw_mask_reuse(r, spec.mask_reuse);
   };
 
   std::ofstream log(log_path, std::ios::app);
@@ -424,8 +427,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         sim::SimWindow w;
         vs.next(w);
         sources.insert(w.scene);
-        const MaskReuse reuse = reuse_of(kValReuse + std::uint64_t(i + k));
-        val_batches.back()->add(w, mask, nullptr, nullptr, false, spec.mask_reuse > 0 ? &reuse : nullptr);
+        const auto reuse = reuse_of(kValReuse + std::uint64_t(i + k));
+        val_batches.back()->add(w, mask, nullptr, nullptr, false, reuse ? &*reuse : nullptr);
       }
     }
     if (!val_files.empty())
@@ -513,9 +516,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       const Similarity warp = draw_similarity(wr, cfg.sensor_width, cfg.sensor_height);
       sim::Rng fr(spec.seed, 0xf11bu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       const bool flip = spec.flip && fr.uniform() < 0.5;
-      const MaskReuse reuse = reuse_of(kReuseStream + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
-      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr, flip,
-                  spec.mask_reuse > 0 ? &reuse : nullptr);
+      const auto reuse = reuse_of(kReuseStream + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
+      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr, flip, reuse ? &*reuse : nullptr);
     }
     const double built = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     data_s += built;
