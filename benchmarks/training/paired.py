@@ -23,9 +23,10 @@ def scene_mpjpe(path):
     return {k: v["mpjpe_mm"] for k, v in json.load(open(path))["by_condition"]["scene"].items()}
 
 
-def poses_mpjpe(path, mode):
-    """Per recording, the mean distance over all scored joints (as yelan eval --run pools them)."""
-    sums = {}
+def pose_errors(path, mode):
+    """Each scored pose of a `yelan eval --run --poses` file: (source, t_us, mask_age, error
+    summed over its valid joints, their count), in the file's order. A pose is scored where the
+    recording has a dancer and the pose says "person" (with --root: both hips in the picture)."""
     with open(path, newline="") as f:
         for row in csv.DictReader(f):
             if row["dancer"] != "1" or row["person"] != "1":
@@ -44,11 +45,19 @@ def poses_mpjpe(path, mode):
                 rt = [(true[5][c] + true[6][c]) / 2 for c in range(3)]
                 pred = [[p[c] - rp[c] for c in range(3)] for p in pred]
                 true = [[t[c] - rt[c] for c in range(3)] for t in true]
-            s = sums.setdefault(row["source"], [0.0, 0])
-            for j in range(13):
-                if valid[j]:
-                    s[0] += math.dist(pred[j], true[j])
-                    s[1] += 1
+            n = sum(valid)
+            if n:
+                err = sum(math.dist(pred[j], true[j]) for j in range(13) if valid[j])
+                yield row["source"], int(row["t_us"]), int(row.get("mask_age") or 0), err, n
+
+
+def poses_mpjpe(path, mode):
+    """Per recording, the mean distance over all scored joints (as yelan eval --run pools them)."""
+    sums = {}
+    for source, _, _, err, n in pose_errors(path, mode):
+        s = sums.setdefault(source, [0.0, 0])
+        s[0] += err
+        s[1] += n
     return {k: s / n for k, (s, n) in sums.items() if n}
 
 

@@ -12,6 +12,7 @@ import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 PAIRED = os.path.join(ROOT, "benchmarks", "training", "paired.py")
+MASK_AGE = os.path.join(ROOT, "benchmarks", "training", "mask_age.py")
 
 
 def write_eval(path, scenes):
@@ -19,16 +20,18 @@ def write_eval(path, scenes):
         json.dump({"by_condition": {"scene": {k: {"mpjpe_mm": v, "frames": 96} for k, v in scenes.items()}}}, f)
 
 
-def write_poses(path, rows):
-    """rows: (source, person, pred 13x3 or None, truth 13x3, head_depth) as yelan eval --run --poses writes them."""
+def write_poses(path, rows, ages=None):
+    """rows: (source, person, pred 13x3 or None, truth 13x3, head_depth) as yelan eval --run --poses
+    writes them; ages: each row's mask_age (0 for all when None)."""
     head = ["source", "t_us", "dancer", "person", "confidence", "mask_ran", "head_depth_mm", "true_head_depth_mm"]
     head += [f"{w}j{j}_{c}" for w in ("", "true_") for j in range(13) for c in "xyz"] + [f"valid{j}" for j in range(13)]
     with open(path, "w") as f:
-        f.write(",".join(head) + "\n")
+        f.write(",".join(head + ["mask_age"]) + "\n")
         for t, (source, person, pred, truth, depth) in enumerate(rows):
-            cells = [source, str(t * 20000), "1", str(person), "0.9", "1", str(depth), str(truth[0][2])]
+            age = ages[t] if ages else 0
+            cells = [source, str(t * 20000), "1", str(person), "0.9", str(int(age == 0)), str(depth), str(truth[0][2])]
             cells += [str(v) if person else "" for p in (pred or [[0, 0, 0]] * 13) for v in p]
-            cells += [str(v) for p in truth for v in p] + ["1"] * 13
+            cells += [str(v) for p in truth for v in p] + ["1"] * 13 + [str(age)]
             f.write(",".join(cells) + "\n")
 
 
@@ -91,6 +94,29 @@ class PairedTest(unittest.TestCase):
             r = self.run_paired("--poses", a, b)
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertIn("B better on 1", r.stdout)  # r1 -5; r2 a dancer twice as far is far worse
+
+    def test_mask_age_pairs_poses_by_time_and_groups_them_by_the_age_of_the_mask(self):
+        with tempfile.TemporaryDirectory() as d:
+            exit_, every, svg = os.path.join(d, "x.csv"), os.path.join(d, "e.csv"), os.path.join(d, "age.svg")
+            z = TRUTH[0][2]
+            # Early exit: ages 0, 1, 2, 0, 1 on one recording, each joint off in x by 2 mm a frame
+            # of age (0, 2, 4, 0, 2); stage 1 on every tick: every pose 1 mm off. The last pose says
+            # nobody on the every-tick run: not paired.
+            ages = [0, 1, 2, 0, 1]
+            write_poses(exit_, [("r", 1, moved(TRUTH, (2 * a, 0, 0)), TRUTH, z) for a in ages], ages)
+            write_poses(every, [("r", 1, moved(TRUTH, (1, 0, 0)), TRUTH, z)] * 4 + [("r", 0, None, TRUTH, -1)])
+            r = subprocess.run([sys.executable, MASK_AGE, "--svg", svg, exit_, every], capture_output=True, text=True)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            rows = {line.split()[0]: line.split() for line in r.stdout.splitlines()[1:] if line.split()[0].isdigit() or line.startswith("     all")}
+            self.assertEqual(rows["0"][1:5], ["2", "0.0", "1.0", "-1.0"])  # ages 0 at t 0 and 3
+            self.assertEqual(rows["1"][1:5], ["1", "2.0", "1.0", "+1.0"])  # age 1 at t 1 (t 4 unpaired)
+            self.assertEqual(rows["2"][1:5], ["1", "4.0", "1.0", "+3.0"])
+            self.assertEqual(rows["all"][1:5], ["4", "1.5", "1.0", "+0.5"])
+            with open(svg) as f:
+                self.assertIn("age 2: +3.0 mm, 1 poses", f.read())
+            r = subprocess.run([sys.executable, MASK_AGE, exit_], capture_output=True, text=True)
+            self.assertNotEqual(r.returncode, 0)
+            self.assertIn("mask_age.py", r.stderr)
 
     def test_odd_argument_count_prints_usage(self):
         r = self.run_paired("only-one.json")
