@@ -16,7 +16,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from paired import pose_errors  # noqa: E402
+from paired import mean_se, pose_errors  # noqa: E402
 
 
 def by_age(exit_csv, every_csv, mode):
@@ -31,9 +31,7 @@ def by_age(exit_csv, every_csv, mode):
 
 def summary(pairs):
     n = len(pairs)
-    d = [a - b for a, b in pairs]
-    mean = sum(d) / n
-    se = math.sqrt(sum((x - mean) ** 2 for x in d) / (n - 1) / n) if n > 1 else float("nan")
+    mean, se = mean_se([a - b for a, b in pairs])
     return n, sum(a for a, _ in pairs) / n, sum(b for _, b in pairs) / n, mean, se
 
 

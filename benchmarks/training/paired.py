@@ -61,6 +61,13 @@ def poses_mpjpe(path, mode):
     return {k: s / n for k, (s, n) in sums.items() if n}
 
 
+def mean_se(values):
+    """The mean of paired differences and its standard error (NaN for a single one)."""
+    n = len(values)
+    mean = sum(values) / n
+    return mean, math.sqrt(sum((v - mean) ** 2 for v in values) / (n - 1) / n) if n > 1 else float("nan")
+
+
 def main(argv):
     mode = None
     if argv and argv[0] == "--poses":
@@ -78,8 +85,7 @@ def main(argv):
             sys.exit(f"{a} and {b} score different recordings, e.g. {missing[0]}")
         diffs += [B[k] - A[k] for k in A]
     n = len(diffs)
-    mean = sum(diffs) / n
-    se = math.sqrt(sum((d - mean) ** 2 for d in diffs) / (n - 1) / n) if n > 1 else float("nan")
+    mean, se = mean_se(diffs)
     print(f"{n} recordings: B - A = {mean:+.1f} +- {se:.1f} mm (standard error), B better on {sum(d < 0 for d in diffs)}")
 
 
