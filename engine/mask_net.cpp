@@ -4,6 +4,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "layers/resample.h"
+
 namespace yelan {
 
 using layers::Act;
@@ -59,7 +61,15 @@ void MaskNet::forward(const Act& x) {
     throw std::invalid_argument("mask net '" + cfg_.name + "': input is " + std::to_string(x.c) + "x" + std::to_string(x.h) +
                                 "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.channels) + "x" +
                                 std::to_string(cfg_.height()) + "x" + std::to_string(cfg_.width()));
-  x_[0] = inc_.forward(x);
+  // mask.pool: the U-Net on the input average-pooled k x k, its logits resized back bilinearly
+  // (k^2 times fewer pixels; the score head reads the pooled map's top as before).
+  const int k = cfg_.mask_pool;
+  Act in = x;
+  if (k > 1) {
+    in = pooled_in_ = pooled_in_buf_.get(x.n, x.c, x.h / k, x.w / k);
+    layers::avg_pool_forward(x, k, pooled_in_);
+  }
+  x_[0] = inc_.forward(in);
   for (int k = 0; k < kLevels; ++k) {
     pooled_[k] = pooled_buf_[k].like(pool_[k].out_shape(x_[k]));
     pool_[k].forward(x_[k], pooled_[k]);
@@ -80,8 +90,15 @@ void MaskNet::forward(const Act& x) {
     layers::concat_channels(skip, padded_[k], cat_[k]);
     y = upo_[k] = up_conv_[k]->forward(cat_[k]);
   }
-  masks_ = masks_buf_.like(outc_.out_shape(y));
-  outc_.forward(y, masks_);
+  if (k > 1) {
+    pooled_masks_ = pooled_masks_buf_.like(outc_.out_shape(y));
+    outc_.forward(y, pooled_masks_);
+    masks_ = masks_buf_.get(x.n, cfg_.n_masks, x.h, x.w);
+    layers::resize_bilinear_forward(pooled_masks_, masks_);
+  } else {
+    masks_ = masks_buf_.like(outc_.out_shape(y));
+    outc_.forward(y, masks_);
+  }
   // The score head is linear up to the pooling (two 1x1 convolutions, no activation between),
   // so pooling first gives the same features on a 1x1 map: 17% of stage 1's FLOPs and its two
   // largest activations saved.
@@ -107,7 +124,13 @@ void MaskNet::backward(const Act& x, const Act& dmasks, const float* dscores) {
   const Act& top = upo_[kLevels - 1];
   const Act dtop = d_top_.like(top);
   zero(dtop);
-  if (dmasks.data) outc_.backward(top, dmasks, &dtop);
+  if (dmasks.data && cfg_.mask_pool > 1) {
+    const Act d = d_pooled_masks_.like(pooled_masks_);
+    layers::resize_bilinear_backward(dmasks, d);
+    outc_.backward(top, d, &dtop);
+  } else if (dmasks.data) {
+    outc_.backward(top, dmasks, &dtop);
+  }
   if (dscores) {
     const int F = 8 * w_[0];
     std::vector<float> dlogit(logits_.size()), feat(std::size_t(x.n) * F), dfeat(feat.size());
@@ -152,7 +175,7 @@ void MaskNet::backward(const Act& x, const Act& dmasks, const float* dscores) {
     layers::accumulate(d_skip_[k].like(x_[k]), dxk);
     g = dxk;
   }
-  inc_.backward(x, g, Act{});  // the TORE input needs no gradient
+  inc_.backward(cfg_.mask_pool > 1 ? pooled_in_ : x, g, Act{});  // the TORE input needs no gradient
 }
 
 }  // namespace yelan

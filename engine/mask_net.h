@@ -75,6 +75,8 @@ class MaskNet : public layers::Module<MaskNet> {
   std::array<int, kLevels> pad_top_{}, pad_left_{};
   layers::ActBuf pooled_buf_[kLevels], upt_buf_[kLevels], padded_buf_[kLevels], cat_buf_[kLevels];
   layers::ActBuf masks_buf_, top_gap_buf_, s1_buf_, gap_buf_;
+  layers::ActBuf pooled_in_buf_, pooled_masks_buf_, d_pooled_masks_;  // mask.pool > 1 only
+  layers::Act pooled_in_, pooled_masks_;
   layers::Act masks_, top_gap_, s1_, gap_;  // the score head: pooled top, then its two 1x1 convolutions
   std::vector<float> logits_, scores_;
   // backward only, each dL/d the activation it is named after

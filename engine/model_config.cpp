@@ -73,6 +73,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.window = get_int(i, where + ".input", "window");
   c.mask_width = get_num(m, where + ".mask", "width_mult");
   c.n_masks = get_int(m, where + ".mask", "n_masks");
+  c.mask_pool = m.contains("pool") ? get_int(m, where + ".mask", "pool") : 1;
   c.pose_width = get_num(p, where + ".pose", "width_mult");
   c.hidden = get_int(p, where + ".pose", "hidden");
   c.stages = get_int(p, where + ".pose", "stages");
@@ -130,6 +131,9 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {std::isfinite(c.presence_a) && std::isfinite(c.presence_b) && c.presence_a >= 0,
        "run.presence: a must be finite and >= 0, b finite"},
       {c.downscale >= 1 && c.height() >= 16 && c.width() >= 16, "input is smaller than 16 x 16 after downscale"},
+      {c.mask_pool >= 1 && c.mask_pool <= 8, "mask.pool must be in 1..8"},
+      {c.mask_pool >= 1 && c.height() / c.mask_pool >= 16 && c.width() / c.mask_pool >= 16,
+       "stage 1's input is smaller than 16 x 16 after mask.pool"},
   };
   for (const auto& ch : checks)
     if (!ch.ok) throw ConfigError(where + ": " + ch.msg);

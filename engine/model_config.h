@@ -17,6 +17,9 @@ struct ModelConfig {
   int channels = 6, sensor_height = 260, sensor_width = 346, downscale = 1, window = 16;
   double mask_width = 1.0;
   int n_masks = 16;
+  // mask.pool: stage 1 runs on the input average-pooled k x k (k^2 fewer pixels, its cost
+  // divided about so), its mask logits resized back to the input bilinearly; 1: none.
+  int mask_pool = 1;
   double pose_width = 1.0;
   int hidden = 128, stages = 3, joints = 13;
   bool bidirectional = true;

@@ -70,6 +70,12 @@ float* thread_scratch(std::size_t floats) {
 
 bool winograd_applicable(const ConvShape& s) { return s.valid() && s.kh == 3 && s.kw == 3 && s.stride == 1; }
 
+bool winograd_pays(const ConvShape& s) {
+  const int tiles = ((s.oh() + 3) / 4) * ((s.ow() + 3) / 4) * s.n;
+  const int channels = std::min(s.ic, s.oc);
+  return winograd_applicable(s) && channels >= 16 && (tiles >= 24 || channels >= 64);
+}
+
 std::size_t winograd_weight_floats(const ConvShape& s) { return 36 * std::size_t(s.ocb()) * s.icb() * kBlock * kBlock; }
 
 void pack_winograd_weights(const ConvShape& s, const float* w, float* out) {

@@ -88,6 +88,14 @@ void unpack_conv_weights(const ConvShape& s, const float* w_fwd, float* w_oihw);
 // into [36][OCB][ICB][16 ic][16 oc]; each of the 36 products is then a GEMM over channels
 // run by the same register-blocked tile as the direct convolution.
 bool winograd_applicable(const ConvShape& s);
+// Whether Winograd beats the direct kernel inside a network, where weights arrive cold: its
+// weights are 4x the direct ones (36 products against 9 taps) and each is reused once per
+// 4x4 tile, so on maps of a few dozen tiles, or 8-channel blocks half padding, the direct
+// kernel wins (stage 2's 8-channel 17x22 convs: 13 against 20 us; 16-channel 9x11: 9 against
+// 11 us, one core, cold weights; isolated and hot, Winograd wins both). Wide layers keep it
+// whatever their size: on stage 1's 8x10 bottleneck (384 channels) the direct kernel's
+// 1-pixel border tiles make it 3x slower.
+bool winograd_pays(const ConvShape& s);
 // The calling thread's scratch of at least `floats` floats, 64-byte aligned, grown (never
 // shrunk) on demand: after the first call of a shape, no allocation. Defined in a baseline
 // file so that no container code is instantiated inside an ISA variant.

@@ -17,7 +17,7 @@ Act ConvBn::forward(const Act& x) {
     post_ = post_buf_.like(s);
     const int c = conv.spec().out;
     if (scale_.size() != std::size_t(c)) scale_ = Floats(c), shift_ = Floats(c);
-    for (int o = 0; o < c; ++o) {
+    for (int o = 0; o < c && !conv.fold_packed(); ++o) {
       scale_[o] = bn.weight.value[o] / std::sqrt(bn.running_var.value[o] + bn.eps);
       shift_[o] = bn.bias.value[o] - bn.running_mean.value[o] * scale_[o];
     }

@@ -107,7 +107,7 @@ void Conv2d::run_forward(const Act& x, const Act& y, const float* w, const float
   const kernels::ConvKernels& k = kernels::conv_kernels();
   if (spec_.transposed)
     kernels::deconv_fwd(k, deconv_shape(x), x.data, w, b, y.data);
-  else if (winograd && wino && winograd_allowed())
+  else if (winograd && wino && winograd_allowed() && kernels::winograd_pays(s))
     k.fwd_winograd(s, x.data, wino, b, y.data);
   else
     k.fwd(s, x.data, w, b, y.data);

@@ -59,6 +59,7 @@ class Conv2d {
   // weights are packed on the first call after weights_changed() or fold_changed().
   void forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd = true);
   void fold_changed() { folded_ = false; }
+  bool fold_packed() const { return folded_; }  // forward_folded will not read scale and shift
   // Adds dL/dweight (and dL/dbias) to the gradients; writes dx when dx is non-null.
   void backward(const Act& x, const Act& dy, const Act* dx);
 

@@ -85,7 +85,7 @@ void WindowConvLSTM::run_direction(const Act& x, int dir) {
       }
     }
     const Act gates = gates_.get(B_, 4 * hidden_, x.h, x.w);
-    cell_.forward(cat, gates);
+    cell_.forward(cat, gates, !grad_enabled());  // Winograd where no backward follows
     Act grouped = gates;
     if (hidden_ % 16) {
       grouped = grouped_.get(B_, 4 * hb * 16, x.h, x.w);

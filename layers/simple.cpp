@@ -34,6 +34,26 @@ float* lane(const Act& a, int n, int c, std::size_t px) {
   return a.data + ((std::size_t(n) * a.cb() + c / 16) * a.pixels() + px) * 16 + c % 16;
 }
 
+// Channels [s0, s0 + count) of image n of `src` to [d0, d0 + count) of `dst` (same pixels), in
+// runs that cross no block boundary on either side: whole blocks are one memcpy, and a
+// U-Net's 24 + 24 channels move 8 or 16 lanes a pixel instead of one.
+void copy_channels(const Act& src, int n, int s0, const Act& dst, int d0, int count) {
+  const std::size_t P = src.pixels();
+  while (count > 0) {
+    const int len = std::min({count, 16 - s0 % 16, 16 - d0 % 16});
+    const float* s = lane(src, n, s0, 0);
+    float* d = lane(dst, n, d0, 0);
+    if (len == 16) {
+      std::memcpy(d, s, P * 16 * sizeof(float));
+    } else {
+      for (std::size_t p = 0; p < P; ++p) std::copy_n(s + p * 16, len, d + p * 16);
+    }
+    s0 += len;
+    d0 += len;
+    count -= len;
+  }
+}
+
 }  // namespace
 
 void activation_forward(Activation a, const Act& x, const Act& y) {
@@ -44,7 +64,9 @@ void activation_forward(Activation a, const Act& x, const Act& y) {
     case Activation::sigmoid: kernels::vmath_kernels().sigmoid(x.data, y.data, n); break;
     case Activation::tanh: kernels::vmath_kernels().tanh(x.data, y.data, n); break;
   }
-  zero_padding(y);
+  // relu(0) = tanh(0) = 0 keep x's zero padding; a pass over every pixel for nothing costs
+  // stage 2 (8- and 13-channel maps) about 4% of its time.
+  if (a == Activation::sigmoid) zero_padding(y);
 }
 
 void activation_backward(Activation a, const Act& y, const Act& dy, const Act& dx) {
@@ -135,29 +157,18 @@ void concat_channels(const Act& a, const Act& b, const Act& y) {
     throw std::invalid_argument("concat: inputs " + std::to_string(a.c) + "x" + std::to_string(a.h) + "x" + std::to_string(a.w) +
                                 " and " + std::to_string(b.c) + "x" + std::to_string(b.h) + "x" + std::to_string(b.w) +
                                 " do not make " + std::to_string(y.c) + " channels");
-  const std::size_t P = a.pixels();
   for (int n = 0; n < a.n; ++n) {
-    if (a.c % 16 == 0) {  // whole blocks: two memcpys per image
-      std::memcpy(y.data + std::size_t(n) * y.cb() * P * 16, a.data + std::size_t(n) * a.cb() * P * 16, a.cb() * P * 64);
-      std::memcpy(y.data + (std::size_t(n) * y.cb() + a.cb()) * P * 16, b.data + std::size_t(n) * b.cb() * P * 16,
-                  b.cb() * P * 64);
-      continue;
-    }
-    for (std::size_t p = 0; p < P; ++p) {
-      for (int c = 0; c < a.c; ++c) *lane(y, n, c, p) = *lane(a, n, c, p);
-      for (int c = 0; c < b.c; ++c) *lane(y, n, a.c + c, p) = *lane(b, n, c, p);
-    }
+    copy_channels(a, n, 0, y, 0, a.c);
+    copy_channels(b, n, 0, y, a.c, b.c);
   }
   zero_padding(y);
 }
 
 void split_channels(const Act& dy, const Act& da, const Act& db) {
-  const std::size_t P = dy.pixels();
-  for (int n = 0; n < dy.n; ++n)
-    for (std::size_t p = 0; p < P; ++p) {
-      for (int c = 0; c < da.c; ++c) *lane(da, n, c, p) = *lane(dy, n, c, p);
-      for (int c = 0; c < db.c; ++c) *lane(db, n, c, p) = *lane(dy, n, da.c + c, p);
-    }
+  for (int n = 0; n < dy.n; ++n) {
+    copy_channels(dy, n, 0, da, 0, da.c);
+    copy_channels(dy, n, da.c, db, 0, db.c);
+  }
   zero_padding(da);
   zero_padding(db);
 }

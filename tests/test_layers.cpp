@@ -2,6 +2,7 @@
 // double sums), on odd channel counts and sizes.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -9,6 +10,7 @@
 
 #include "layers/batchnorm.h"
 #include "layers/conv2d.h"
+#include "layers/resample.h"
 #include "layers/simple.h"
 
 using namespace yelan::layers;
@@ -218,18 +220,61 @@ TEST_CASE("activations, pooling, linear and concatenation: gradients by finite d
     check_fd(loss, fc.weight.value.data(), fc.weight.numel(), fc.weight.grad.data(), 3, 1e-2, 2e-3, "linear dw");
     check_fd(loss, fc.bias.value.data(), 5, fc.bias.grad.data(), 1, 1e-2, 2e-3, "linear db");
   }
-  for (auto [ca, cb] : {std::pair{13, 26}, std::pair{16, 5}, std::pair{3, 3}}) {
-    Owned a(1, ca, 3, 2, 15), b(1, cb, 3, 2, 16), y(1, ca + cb, 3, 2), da(a.act), db(b.act);
+  // Every lane of every pixel of both images, the padding lanes zero: runs that cross a
+  // block boundary on one side only (13 + 26, 24 + 24, 8 + 13) as well as whole blocks.
+  for (auto [ca, cb] : {std::pair{13, 26}, std::pair{16, 5}, std::pair{3, 3}, std::pair{24, 24}, std::pair{8, 13},
+                        std::pair{32, 16}}) {
+    INFO(ca << " + " << cb << " channels");
+    Owned a(2, ca, 3, 2, 15), b(2, cb, 3, 2, 16), y(2, ca + cb, 3, 2), da(a.act), db(b.act);
+    std::fill_n(y.mem.data(), y.act.floats(), 7.f);  // the padding must be written, not assumed
     concat_channels(a.act, b.act, y.act);
-    for (int c = 0; c < ca + cb; ++c) {
-      const Owned& src = c < ca ? a : b;
-      const int sc = c < ca ? c : c - ca;
-      REQUIRE(y.mem[(c / 16) * 6 * 16 + 4 * 16 + c % 16] == src.mem[(sc / 16) * 6 * 16 + 4 * 16 + sc % 16]);
-    }
+    const auto at = [](const Owned& o, int n, int c, int p) {
+      return o.mem[((std::size_t(n) * o.act.cb() + c / 16) * 6 + p) * 16 + c % 16];
+    };
+    for (int n = 0; n < 2; ++n)
+      for (int p = 0; p < 6; ++p)
+        for (int c = 0; c < y.act.cb() * 16; ++c)
+          REQUIRE(at(y, n, c, p) == (c >= ca + cb ? 0.f : c < ca ? at(a, n, c, p) : at(b, n, c - ca, p)));
     split_channels(y.act, da.act, db.act);
     for (std::size_t i = 0; i < a.act.floats(); ++i) REQUIRE(da.mem[i] == a.mem[i]);
     for (std::size_t i = 0; i < b.act.floats(); ++i) REQUIRE(db.mem[i] == b.mem[i]);
   }
+}
+
+TEST_CASE("avg_pool and bilinear resize: PyTorch's values, and each backward the forward's adjoint", "[layers][resample]") {
+  // F.interpolate([[1, 2], [3, 4]], size=(4, 4), mode='bilinear', align_corners=False)
+  Owned x(1, 1, 2, 2), y(1, 1, 4, 4);
+  for (int i = 0; i < 4; ++i) x.mem[std::size_t(i) * 16] = float(i + 1);
+  resize_bilinear_forward(x.act, y.act);
+  const float want[16] = {1, 1.25f, 1.75f, 2, 1.5f, 1.75f, 2.25f, 2.5f, 2.5f, 2.75f, 3.25f, 3.5f, 3, 3.25f, 3.75f, 4};
+  for (int i = 0; i < 16; ++i) REQUIRE(y.mem[std::size_t(i) * 16] == Approx(want[i]).margin(1e-6));
+  // F.avg_pool2d over a 3 x 5 map, k 2: one 1 x 2 output, the last row and column dropped
+  Owned p(1, 1, 3, 5), q(1, 1, 1, 2);
+  for (int i = 0; i < 15; ++i) p.mem[std::size_t(i) * 16] = float(i);
+  avg_pool_forward(p.act, 2, q.act);
+  REQUIRE(q.mem[0] == Approx((0 + 1 + 5 + 6) / 4.0));
+  REQUIRE(q.mem[16] == Approx((2 + 3 + 7 + 8) / 4.0));
+  // <forward(a), b> == <a, backward(b)> on odd shapes, both directions of resizing
+  const auto dot = [](const Act& u, const Act& v) {
+    double sum = 0;
+    for (std::size_t i = 0; i < u.floats(); ++i) sum += double(u.data[i]) * v.data[i];
+    return sum;
+  };
+  struct Case { int n, c, h, w, oh, ow; };
+  for (const Case& k : {Case{2, 21, 7, 11, 13, 23}, Case{1, 5, 65, 86, 130, 173}, Case{1, 16, 13, 9, 5, 4}}) {
+    INFO(k.h << "x" << k.w << " -> " << k.oh << "x" << k.ow);
+    Owned a(k.n, k.c, k.h, k.w, 41), b(k.n, k.c, k.oh, k.ow, 42), fa(b.act), bb(a.act);
+    resize_bilinear_forward(a.act, fa.act);
+    resize_bilinear_backward(b.act, bb.act);
+    REQUIRE(dot(fa.act, b.act) == Approx(dot(a.act, bb.act)).epsilon(1e-5));
+  }
+  for (int k : {2, 3}) {
+    Owned a(2, 19, 11, 8, 43), b(2, 19, 11 / k, 8 / k, 44), fa(b.act), bb(a.act);
+    avg_pool_forward(a.act, k, fa.act);
+    avg_pool_backward(b.act, k, bb.act);
+    REQUIRE(dot(fa.act, b.act) == Approx(dot(a.act, bb.act)).epsilon(1e-5));
+  }
+  CHECK_THROWS_AS(avg_pool_forward(p.act, 2, y.act), std::invalid_argument);
 }
 
 TEST_CASE("copy_window moves a window between maps of any size, element by element, and refuses one that does not fit", "[layers][simple]") {

@@ -168,7 +168,10 @@ TEST_CASE("mask net parameters match the reference's names and shapes", "[networ
 }
 
 TEST_CASE("mask net forward shapes, scores in (0, 1), gradients by finite differences", "[networks][mask]") {
-  const ModelConfig cfg = load_model_config("tiny");
+  const int pool = GENERATE(1, 2);  // 2: the U-Net on the pooled input, its logits resized back
+  INFO("mask.pool " << pool);
+  ModelConfig cfg = load_model_config("tiny");
+  cfg.mask_pool = pool;
   MaskNet net(cfg);
   net.init(3);
   net.set_training(false);

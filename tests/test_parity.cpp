@@ -149,8 +149,16 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, and
     j["pose"]["head_stride"] = 4;
     std::ofstream(dir / "tiny-s4.json") << j.dump(2);
   }
-  for (const std::string& name :
-       std::vector<std::string>{"tiny", "small", (dir / "paper-w1.json").string(), (dir / "tiny-s4.json").string()}) {
+  // the default's shapes with stage 1 on the input pooled 2 x 2 (130 x 173 -> 65 x 86 -> 130 x 173)
+  {
+    std::ifstream in(source_dir() + "/weights_tools/configs/small.json");
+    auto j = nlohmann::json::parse(in);
+    j["name"] = "small-p2";
+    j["mask"]["pool"] = 2;
+    std::ofstream(dir / "small-p2.json") << j.dump(2);
+  }
+  for (const std::string& name : std::vector<std::string>{"tiny", "small", (dir / "paper-w1.json").string(),
+                                                          (dir / "tiny-s4.json").string(), (dir / "small-p2.json").string()}) {
     const std::string stem = std::filesystem::path(name).stem().string();
     const std::string cs = (dir / (stem + ".h5")).string();
     const std::string cmd = "cd '" + source_dir() + "' && /usr/bin/python3 weights_tools/make_parity_case.py --config '" +

@@ -47,7 +47,7 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   REQUIRE(r.code == 0);
   const auto rows = csv_rows(slurp(d / "p.csv"));
   REQUIRE(rows.size() >= 14);  // header + one pose per 20 ms tick of 0.3 s
-  CHECK(rows[0].size() == 1 + 39 + 5);
+  CHECK(rows[0].size() == 1 + 39 + 6);
   CHECK(rows[0][0] == "t_us");
   CHECK(rows[0][1] == "head_x");
   CHECK(rows[0][40] == "confidence");
@@ -55,9 +55,11 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   CHECK(rows[0][42] == "person");
   CHECK(rows[0][43] == "pose_confidence");
   CHECK(rows[0][44] == "mask_share");
+  CHECK(rows[0][45] == "mask_age");
   for (std::size_t i = 1; i < rows.size(); ++i) {
-    REQUIRE(rows[i].size() == 45);
+    REQUIRE(rows[i].size() == 46);
     CHECK(rows[i][41] == "1");  // no early exit: stage 1 at every tick
+    CHECK(rows[i][45] == "0");
     if (i > 1) CHECK(std::stoll(rows[i][0]) - std::stoll(rows[i - 1][0]) == 20000);
   }
   CHECK(contains(slurp(d / "s.json"), "\"mask_run_fraction\": 1"));
@@ -70,11 +72,16 @@ TEST_CASE("run: poses from a recording, CSV columns, early exit and its fraction
   CHECK_FALSE(contains(slurp(d / "e.json"), "\"early_exit_saved_ms\": 0,"));
   const auto er = csv_rows(slurp(d / "e.csv"));
   int ran = 0;
-  for (std::size_t i = 1; i < er.size(); ++i) ran += er[i][41] == "1";
+  for (std::size_t i = 1; i < er.size(); ++i) {
+    ran += er[i][41] == "1";
+    // the mask read is as old as the ticks since stage 1 ran: 0, 1, 2, 0, 1, 2, ...
+    CHECK(er[i][45] == (er[i][41] == "1" ? "0" : std::to_string(std::stoi(er[i - 1][45]) + 1)));
+  }
   CHECK(ran == int((er.size() - 1 + 2) / 3));
   // JSON and HDF5 outputs; a bad extension is refused before any work.
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.json"}).code == 0);
   CHECK(contains(slurp(d / "p.json"), "\"joints_mm\""));
+  CHECK(contains(slurp(d / "p.json"), "\"mask_age\": 0,"));
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.h5"}).code == 0);
   CHECK(run_cli({"run", "--weights", d / "w.h5", d / "r.yelan.h5", "--out", d / "p.txt"}).code == 2);
   CHECK(run_cli({"run", "--weights", d / "w.h5"}).code == 2);
@@ -123,7 +130,7 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, no p
   const auto rows = csv_rows(slurp(d / "n.csv"));
   REQUIRE(rows.size() >= 5);
   for (std::size_t i = 1; i < rows.size(); ++i) {
-    REQUIRE(rows[i].size() == 45);
+    REQUIRE(rows[i].size() == 46);
     CHECK(rows[i][1].empty());
     CHECK(rows[i][39].empty());
     CHECK(std::stod(rows[i][40]) < 1e-6);
@@ -136,7 +143,7 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, no p
   // tick; a setting outside 0..1 s is refused.
   const auto mask_ran = [&](const std::string& csv) {
     std::vector<int> ran;
-    for (const auto& row : csv_rows(slurp(d / csv))) if (row.size() == 45 && row[0] != "t_us") ran.push_back(std::stoi(row[41]));
+    for (const auto& row : csv_rows(slurp(d / csv))) if (row.size() == 46 && row[0] != "t_us") ran.push_back(std::stoi(row[41]));
     return ran;
   };
   REQUIRE(run_cli({"run", "--weights", d / "nobody.h5", d / "r.yelan.h5", "--out", d / "i.csv", "--idle-recheck", "0.04"}).code == 0);
@@ -380,7 +387,7 @@ TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 
   REQUIRE(none.size() >= 14);
   REQUIRE(pres.size() == none.size());
   for (std::size_t i = 1; i < none.size(); ++i) {
-    REQUIRE(pres[i].size() == 45);
+    REQUIRE(pres[i].size() == 46);
     for (int c = 0; c <= 39; ++c) CHECK(pres[i][std::size_t(c)] == none[i][std::size_t(c)]);  // stage 2 saw the same input
     CHECK(none[i][41] == "0");  // no stage 1: never ran, presence 1
     CHECK(none[i][40] == "1.0000");

@@ -372,6 +372,18 @@ case "$what" in
     CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_S7 BATCH=32 train mask mask-s16 "${MASK_S16_STEPS:-1000}" \
       --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip ${STOP_AT:+--stop-at "$STOP_AT"} \
       --init "${MASK_S16_INIT:-$RUNS/mask-s15/final.h5}" ;;
+  # Session 2026-11-30 (twenty-first): stage 1 at a quarter of the pixels. Stage 1 is 28 ms of
+  # a run on one core against 3.3 for stage 2, and every early-exit setting trades against it
+  # (the default: 100-115 poses/s at beta 0.94; issue 16 asks 150). mask.pool 2 runs the same
+  # U-Net on the input average-pooled 2 x 2 and resizes its logits back: 9 ms a run, the same
+  # parameters. mask-s21-pool2 fine-tunes the default's mask net (mask-s15's final weights) so,
+  # with mask-s16's recipe on ds-s7: mask-s16 (MASK_S16_INIT=models/default.h5 where runs/
+  # mask-s15 is gone) is its control at full resolution.
+  # MASK_S21_LR: the rate (default mask-s16's 1e-4).
+  train-mask-s21-pool2)
+    CFG=benchmarks/configs/small-mask0.375p2-pose0.125-masked-reuse.json DATA=$DATA_S7 BATCH=32 train mask mask-s21-pool2 \
+      "${MASK_S21_STEPS:-1000}" --lr "${MASK_S21_LR:-1e-4}" --mask-frames 1 --windows-per-visit 15 --flip \
+      ${STOP_AT:+--stop-at "$STOP_AT"} --init "${MASK_S21_INIT:-models/default.h5}" ;;
   # Session 2026-11-29 (seventeenth): the pose net again, after eight sessions on stage 1.
   # A body filling the frame spans 16 cells of the 17 x 22 heatmaps (106 mm a cell), and the
   # net's image error on recordings it memorised (fit16) stays at 7-13 px: does resolution

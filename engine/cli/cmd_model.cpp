@@ -160,8 +160,12 @@ int summary(const Args& a, std::ostream& out) {
     return kOk;
   }
   out << "config " << cfg.name << ": input " << cfg.window << " x " << cfg.channels << " x " << cfg.height() << " x "
-      << cfg.width() << ", ConvLSTM " << (cfg.bidirectional ? "bidirectional" : "causal") << "\n"
-      << "per frame, as inference runs it (BN and ReLU folded into each convolution):\n";
+      << cfg.width() << ", ConvLSTM " << (cfg.bidirectional ? "bidirectional" : "causal") << "\n";
+  if (cfg.mask_pool > 1)
+    out << "stage 1 on the input average-pooled " << cfg.mask_pool << " x " << cfg.mask_pool << " ("
+        << cfg.height() / cfg.mask_pool << " x " << cfg.width() / cfg.mask_pool
+        << "), its mask logits resized back bilinearly\n";
+  out << "per frame, as inference runs it (BN and ReLU folded into each convolution):\n";
   out << std::left << std::setw(5) << "net" << std::setw(42) << "layer" << std::setw(13) << "op" << std::setw(14)
       << "in" << std::setw(14) << "out" << std::right << std::setw(10) << "params" << std::setw(10) << "MFLOPs"
       << std::setw(10) << "act KiB" << "\n";

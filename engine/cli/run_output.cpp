@@ -52,7 +52,8 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
       }
       o << ", \"confidence\": " << p.confidence << ", \"person\": " << (p.person ? "true" : "false")
         << ", \"pose_confidence\": " << p.pose_confidence << ", \"mask_share\": " << p.mask_share
-        << ", \"mask_ran\": " << (p.mask_ran ? 1 : 0) << ", \"stale\": " << (p.stale ? "true" : "false") << "}";
+        << ", \"mask_ran\": " << (p.mask_ran ? 1 : 0) << ", \"mask_age\": " << p.mask_age
+        << ", \"stale\": " << (p.stale ? "true" : "false") << "}";
     }
     o << "\n]\n";
     if (!o.flush()) throw std::runtime_error("cannot write " + tmp.path());
@@ -68,6 +69,7 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
     std::vector<std::int64_t> t;
     std::vector<float> j, c, pc, share;
     std::vector<std::uint8_t> m, person;
+    std::vector<std::int32_t> age;
     for (const auto& p : poses) {
       t.push_back(p.t_us);
       for (const auto& q : p.joints_mm) j.insert(j.end(), q.begin(), q.end());
@@ -76,6 +78,7 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
       person.push_back(p.person);
       pc.push_back(p.pose_confidence);
       share.push_back(p.mask_share);
+      age.push_back(p.mask_age);
     }
     const hsize_t n = poses.size();
     put("t_us", H5T_STD_I64LE, H5T_NATIVE_INT64, {n}, t.data());
@@ -85,6 +88,7 @@ void write_poses(const std::string& path, const std::vector<run::Pose>& poses) {
     put("person", H5T_STD_U8LE, H5T_NATIVE_UINT8, {n}, person.data());  // joints_mm NaN where 0
     put("pose_confidence", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n}, pc.data());
     put("mask_share", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n}, share.data());
+    put("mask_age", H5T_STD_I32LE, H5T_NATIVE_INT32, {n}, age.data());
     f.reset();
   }
   tmp.commit();

@@ -538,7 +538,7 @@ std::string pose_csv_header() {
   std::string h = "t_us";
   for (const char* n : camera::sim::kJointNames)
     for (const char* c : {"x", "y", "z"}) h += std::string(",") + n + "_" + c;
-  return h + ",confidence,mask_ran,person,pose_confidence,mask_share";
+  return h + ",confidence,mask_ran,person,pose_confidence,mask_share,mask_age";
 }
 
 std::string pose_csv_row(const Pose& p) {
@@ -552,7 +552,7 @@ std::string pose_csv_row(const Pose& p) {
   }
   o.precision(4);
   o << "," << p.confidence << "," << (p.mask_ran ? 1 : 0) << "," << (p.person ? 1 : 0) << "," << p.pose_confidence << ","
-    << p.mask_share;
+    << p.mask_share << "," << p.mask_age;
   return o.str();
 }
 

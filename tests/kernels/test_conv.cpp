@@ -285,3 +285,17 @@ TEST_CASE("Winograd F(4,3) inference path stays within its documented error", "[
   }
   WARN("Winograd F(4,3) worst relative error (vs sum |x w|): " << worst_seen);
 }
+
+TEST_CASE("Winograd runs where it pays inside a network: wide or large maps, never 8-channel blocks", "[kernels][winograd]") {
+  // stage 2's hourglass (8 and 16 channels on 17x22 and 9x11 maps) and stage 1's U-Net
+  REQUIRE_FALSE(winograd_pays(shape_of({1, 8, 17, 22, 8, 3, 1, 1})));
+  REQUIRE_FALSE(winograd_pays(shape_of({1, 8, 33, 44, 8, 3, 1, 1})));
+  REQUIRE_FALSE(winograd_pays(shape_of({1, 16, 9, 11, 16, 3, 1, 1})));    // 9 tiles
+  REQUIRE_FALSE(winograd_pays(shape_of({1, 16, 17, 22, 8, 3, 1, 1})));
+  REQUIRE(winograd_pays(shape_of({1, 16, 17, 22, 16, 3, 1, 1})));         // 30 tiles
+  REQUIRE(winograd_pays(shape_of({3, 16, 9, 11, 16, 3, 1, 1})));          // a batch of 3: 27
+  REQUIRE(winograd_pays(shape_of({1, 24, 130, 173, 24, 3, 1, 1})));
+  REQUIRE(winograd_pays(shape_of({1, 384, 8, 10, 384, 3, 1, 1})));        // 6 tiles, but wide
+  REQUIRE_FALSE(winograd_pays(shape_of({1, 64, 33, 44, 64, 3, 2, 1})));   // stride 2: not applicable
+  REQUIRE_FALSE(winograd_pays(shape_of({1, 64, 33, 44, 64, 1, 1, 0})));
+}

@@ -40,7 +40,8 @@ class ModelConfig:
     mask_role: str = "mask"        # mask | presence (stage 1 only says whether anyone is there) | none
     crop_margin: int = 0           # inference only (C++ PoseNet::forward_cropped); 0: whole frame
     head_stride: int = 8           # the ResNet head's stride: 8, or 4 (layer2 keeps layer1's resolution)
-    representation: str = "tore"   # or "counts": log(1 + events) per polarity per frame period              # the JSON object this was read from
+    representation: str = "tore"   # or "counts": log(1 + events) per polarity per frame period
+    mask_pool: int = 1             # stage 1 on the input avg-pooled k x k, its logits resized back bilinearly              # the JSON object this was read from
 
     @property
     def height(self):
@@ -114,6 +115,7 @@ def config_from_dict(d, where="config"):
         crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
         head_stride=_get(p, where + ".pose", "head_stride", int, 8),
         representation=_get(i, where + ".input", "representation", str, "tore"),
+        mask_pool=_get(m, where + ".mask", "pool", int, 1),
         mask_role=_get(m, where + ".mask", "role", str,
                        "mask" if _get_bool(p, where + ".pose", "masked_input", True) else "none"),
     )
@@ -157,6 +159,9 @@ def config_from_dict(d, where="config"):
         (cfg.representation != "counts" or cfg.channels == 2, "input.channels must be 2 for counts (one per polarity)"),
         # The U-Net pools 4 times and the pose net divides by 16 before the hourglass.
         (cfg.height >= 16 and cfg.width >= 16, "input is smaller than 16 x 16 after downscale"),
+        (1 <= cfg.mask_pool <= 8, "mask.pool must be in 1..8"),
+        (cfg.height // max(cfg.mask_pool, 1) >= 16 and cfg.width // max(cfg.mask_pool, 1) >= 16,
+         "stage 1's input is smaller than 16 x 16 after mask.pool"),
     ]
     for ok, msg in checks:
         if not ok:

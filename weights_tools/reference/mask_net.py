@@ -75,9 +75,13 @@ class MaskNet(nn.Module):
         self.score_conv = nn.Sequential(nn.Conv2d(hid, hid * 4, 1), nn.Conv2d(hid * 4, hid * 8, 1))
         self.avgpool = nn.AdaptiveAvgPool2d((1, 1))
         self.fc = nn.Linear(hid * 8, cfg.n_masks)
+        self.pool = cfg.mask_pool
 
     def forward(self, x):
         """x (N, C, H, W) -> mask logits (N, n_masks, H, W), scores in (0,1) (N, n_masks)."""
+        size = x.shape[2:]
+        if self.pool > 1:
+            x = F.avg_pool2d(x, self.pool)
         x1 = self.inc(x)
         x2 = self.down1(x1)
         x3 = self.down2(x2)
@@ -88,5 +92,7 @@ class MaskNet(nn.Module):
         y = self.up3(y, x2)
         y = self.up4(y, x1)
         masks = self.outc(y)
+        if self.pool > 1:
+            masks = F.interpolate(masks, size=size, mode="bilinear", align_corners=False)
         s = torch.flatten(self.avgpool(self.score_conv(y)), 1)
         return masks, torch.sigmoid(self.fc(s))
