@@ -61,13 +61,13 @@ void MaskNet::forward(const Act& x) {
     throw std::invalid_argument("mask net '" + cfg_.name + "': input is " + std::to_string(x.c) + "x" + std::to_string(x.h) +
                                 "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.channels) + "x" +
                                 std::to_string(cfg_.height()) + "x" + std::to_string(cfg_.width()));
-  // mask.pool: the U-Net on the input average-pooled k x k, its logits resized back bilinearly
-  // (k^2 times fewer pixels; the score head reads the pooled map's top as before).
-  const int k = cfg_.mask_pool;
+  // mask.pool: the U-Net on the input average-pooled pool x pool, its logits resized back bilinearly
+  // (pool^2 times fewer pixels; the score head reads the pooled map's top as before).
+  const int pool = cfg_.mask_pool;
   Act in = x;
-  if (k > 1) {
-    in = pooled_in_ = pooled_in_buf_.get(x.n, x.c, x.h / k, x.w / k);
-    layers::avg_pool_forward(x, k, pooled_in_);
+  if (pool > 1) {
+    in = pooled_in_ = pooled_in_buf_.get(x.n, x.c, x.h / pool, x.w / pool);
+    layers::avg_pool_forward(x, pool, pooled_in_);
   }
   x_[0] = inc_.forward(in);
   for (int k = 0; k < kLevels; ++k) {
@@ -90,7 +90,7 @@ void MaskNet::forward(const Act& x) {
     layers::concat_channels(skip, padded_[k], cat_[k]);
     y = upo_[k] = up_conv_[k]->forward(cat_[k]);
   }
-  if (k > 1) {
+  if (pool > 1) {
     pooled_masks_ = pooled_masks_buf_.like(outc_.out_shape(y));
     outc_.forward(y, pooled_masks_);
     masks_ = masks_buf_.get(x.n, cfg_.n_masks, x.h, x.w);

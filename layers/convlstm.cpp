@@ -11,23 +11,6 @@
 namespace yelan::layers {
 namespace {
 
-float* lane_ptr(const Act& a, int n, int c, std::size_t px) {
-  return a.data + ((std::size_t(n) * a.cb() + c / 16) * a.pixels() + px) * 16 + c % 16;
-}
-
-// Copies `count` channels of image `sn` of src (from channel sc) to image `dn` of dst (from
-// channel dc). Whole blocks go as memcpy; otherwise lane by lane.
-void copy_channels(const Act& src, int sn, int sc, const Act& dst, int dn, int dc, int count) {
-  const std::size_t P = src.pixels();
-  if (sc % 16 == 0 && dc % 16 == 0 && (count % 16 == 0 || (sc + count == src.c && dc + count == dst.c))) {
-    const int blocks = (count + 15) / 16;
-    std::memcpy(lane_ptr(dst, dn, dc, 0), lane_ptr(src, sn, sc, 0), std::size_t(blocks) * P * 64);
-    return;
-  }
-  for (std::size_t p = 0; p < P; ++p)
-    for (int c = 0; c < count; ++c) *lane_ptr(dst, dn, dc + c, p) = *lane_ptr(src, sn, sc + c, p);
-}
-
 // Conv output (4H channels, i f o g) <-> the LSTM kernel's layout: gate k in its own
 // ceil(H/16) blocks. When H is a multiple of 16 the two coincide.
 void group_gates(const Act& g, int hidden, const Act& grouped, bool to_grouped) {

@@ -35,6 +35,31 @@ float* px(const Act& a, int n, int cb, int y, int x) {
   return a.data + (((std::size_t(n) * a.cb() + cb) * a.h + y) * a.w + x) * 16;
 }
 
+// The input pixels one output pixel of a bilinear resize samples: (i0, j0), (i0, j1), (i1, j0),
+// (i1, j1), with weights from the row's and column's fractions.
+struct Nbr {
+  float* p[4];
+};
+
+// Calls f(neighbours in `in`, row fraction, column fraction, the pixel of `out`) for every
+// output pixel of every image and channel block: the forward gathers through it, the
+// backward scatters (its `in` is dx).
+template <class F>
+void bilinear_walk(const Act& in, const Act& out, F f) {
+  const auto ty = taps(in.h, out.h), tx = taps(in.w, out.w);
+  for (int n = 0; n < out.n; ++n)
+    for (int cb = 0; cb < out.cb(); ++cb)
+      for (int i = 0; i < out.h; ++i) {
+        const Tap& r = ty[std::size_t(i)];
+        for (int j = 0; j < out.w; ++j) {
+          const Tap& c = tx[std::size_t(j)];
+          const Nbr q{{px(in, n, cb, r.i0, c.i0), px(in, n, cb, r.i0, c.i1), px(in, n, cb, r.i1, c.i0),
+                       px(in, n, cb, r.i1, c.i1)}};
+          f(q, r.l1, c.l1, px(out, n, cb, i, j));
+        }
+      }
+}
+
 }  // namespace
 
 void avg_pool_forward(const Act& x, int k, const Act& y) {
@@ -78,43 +103,23 @@ void avg_pool_backward(const Act& dy, int k, const Act& dx) {
 
 void resize_bilinear_forward(const Act& x, const Act& y) {
   check_images(x, y, "resize_bilinear");
-  const auto ty = taps(x.h, y.h), tx = taps(x.w, y.w);
-  for (int n = 0; n < x.n; ++n)
-    for (int cb = 0; cb < x.cb(); ++cb)
-      for (int i = 0; i < y.h; ++i) {
-        const Tap& r = ty[std::size_t(i)];
-        for (int j = 0; j < y.w; ++j) {
-          const Tap& c = tx[std::size_t(j)];
-          const float *a = px(x, n, cb, r.i0, c.i0), *b = px(x, n, cb, r.i0, c.i1), *e = px(x, n, cb, r.i1, c.i0),
-                      *f = px(x, n, cb, r.i1, c.i1);
-          float* d = px(y, n, cb, i, j);
-          for (int l = 0; l < 16; ++l)
-            d[l] = (1.f - r.l1) * ((1.f - c.l1) * a[l] + c.l1 * b[l]) + r.l1 * ((1.f - c.l1) * e[l] + c.l1 * f[l]);
-        }
-      }
+  bilinear_walk(x, y, [](const Nbr& q, float ry, float rx, float* d) {
+    for (int l = 0; l < 16; ++l)
+      d[l] = (1.f - ry) * ((1.f - rx) * q.p[0][l] + rx * q.p[1][l]) + ry * ((1.f - rx) * q.p[2][l] + rx * q.p[3][l]);
+  });
 }
 
 void resize_bilinear_backward(const Act& dy, const Act& dx) {
   check_images(dx, dy, "resize_bilinear backward");
   std::memset(dx.data, 0, dx.floats() * sizeof(float));
-  const auto ty = taps(dx.h, dy.h), tx = taps(dx.w, dy.w);
-  for (int n = 0; n < dy.n; ++n)
-    for (int cb = 0; cb < dy.cb(); ++cb)
-      for (int i = 0; i < dy.h; ++i) {
-        const Tap& r = ty[std::size_t(i)];
-        for (int j = 0; j < dy.w; ++j) {
-          const Tap& c = tx[std::size_t(j)];
-          const float* g = px(dy, n, cb, i, j);
-          float *a = px(dx, n, cb, r.i0, c.i0), *b = px(dx, n, cb, r.i0, c.i1), *e = px(dx, n, cb, r.i1, c.i0),
-                *f = px(dx, n, cb, r.i1, c.i1);
-          for (int l = 0; l < 16; ++l) {
-            a[l] += (1.f - r.l1) * (1.f - c.l1) * g[l];
-            b[l] += (1.f - r.l1) * c.l1 * g[l];
-            e[l] += r.l1 * (1.f - c.l1) * g[l];
-            f[l] += r.l1 * c.l1 * g[l];
-          }
-        }
-      }
+  bilinear_walk(dx, dy, [](const Nbr& q, float ry, float rx, float* g) {
+    for (int l = 0; l < 16; ++l) {
+      q.p[0][l] += (1.f - ry) * (1.f - rx) * g[l];
+      q.p[1][l] += (1.f - ry) * rx * g[l];
+      q.p[2][l] += ry * (1.f - rx) * g[l];
+      q.p[3][l] += ry * rx * g[l];
+    }
+  });
 }
 
 }  // namespace yelan::layers

@@ -30,31 +30,33 @@ void zero_padding(const Act& y) {
   }
 }
 
-float* lane(const Act& a, int n, int c, std::size_t px) {
+}  // namespace
+
+float* lane_ptr(const Act& a, int n, int c, std::size_t px) {
   return a.data + ((std::size_t(n) * a.cb() + c / 16) * a.pixels() + px) * 16 + c % 16;
 }
 
-// Channels [s0, s0 + count) of image n of `src` to [d0, d0 + count) of `dst` (same pixels), in
-// runs that cross no block boundary on either side: whole blocks are one memcpy, and a
-// U-Net's 24 + 24 channels move 8 or 16 lanes a pixel instead of one.
-void copy_channels(const Act& src, int n, int s0, const Act& dst, int d0, int count) {
+// Runs that cross no block boundary on either side: whole blocks are one memcpy, and a U-Net's
+// 24 + 24 channels move 8 or 16 lanes a pixel instead of one. A run that ends both maps (same
+// lane offset) takes the source's zero padding lanes along, so the destination's stay zero.
+void copy_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count) {
   const std::size_t P = src.pixels();
+  const bool ends_both = s0 + count == src.c && d0 + count == dst.c;
   while (count > 0) {
-    const int len = std::min({count, 16 - s0 % 16, 16 - d0 % 16});
-    const float* s = lane(src, n, s0, 0);
-    float* d = lane(dst, n, d0, 0);
-    if (len == 16) {
+    int len = std::min({count, 16 - s0 % 16, 16 - d0 % 16});
+    const int lanes = len == count && ends_both && s0 % 16 == d0 % 16 ? 16 - s0 % 16 : len;
+    const float* s = lane_ptr(src, sn, s0, 0);
+    float* d = lane_ptr(dst, dn, d0, 0);
+    if (lanes == 16) {
       std::memcpy(d, s, P * 16 * sizeof(float));
     } else {
-      for (std::size_t p = 0; p < P; ++p) std::copy_n(s + p * 16, len, d + p * 16);
+      for (std::size_t p = 0; p < P; ++p) std::copy_n(s + p * 16, lanes, d + p * 16);
     }
     s0 += len;
     d0 += len;
     count -= len;
   }
 }
-
-}  // namespace
 
 void activation_forward(Activation a, const Act& x, const Act& y) {
   same_shape(x, y, "activation");
@@ -158,16 +160,16 @@ void concat_channels(const Act& a, const Act& b, const Act& y) {
                                 " and " + std::to_string(b.c) + "x" + std::to_string(b.h) + "x" + std::to_string(b.w) +
                                 " do not make " + std::to_string(y.c) + " channels");
   for (int n = 0; n < a.n; ++n) {
-    copy_channels(a, n, 0, y, 0, a.c);
-    copy_channels(b, n, 0, y, a.c, b.c);
+    copy_channels(a, n, 0, y, n, 0, a.c);
+    copy_channels(b, n, 0, y, n, a.c, b.c);
   }
   zero_padding(y);
 }
 
 void split_channels(const Act& dy, const Act& da, const Act& db) {
   for (int n = 0; n < dy.n; ++n) {
-    copy_channels(dy, n, 0, da, 0, da.c);
-    copy_channels(dy, n, da.c, db, 0, db.c);
+    copy_channels(dy, n, 0, da, n, 0, da.c);
+    copy_channels(dy, n, da.c, db, n, 0, db.c);
   }
   zero_padding(da);
   zero_padding(db);

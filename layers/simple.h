@@ -1,5 +1,6 @@
 // Parameter-free layers and Linear: activations, pooling, channel concatenation, sums.
 #pragma once
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -50,6 +51,12 @@ class Linear {
 // of `dst` (same images and channel blocks, any sizes): padding a map into a larger one,
 // cropping it back out (the adjoint), or pasting a crop's features into the frame's.
 void copy_window(const Act& src, int sy, int sx, const Act& dst, int dy, int dx, int h, int w);
+
+// Address of channel c of pixel px of image n in the blocked layout (n, c/16, pixel, c%16).
+float* lane_ptr(const Act& a, int n, int c, std::size_t px);
+// Channels [s0, s0 + count) of image sn of src to [d0, d0 + count) of image dn of dst (same
+// pixels, any channel offsets and counts).
+void copy_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count);
 
 // Channel concatenation [a, b] -> y and its backward split (any channel counts).
 void concat_channels(const Act& a, const Act& b, const Act& y);

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -238,6 +239,23 @@ TEST_CASE("activations, pooling, linear and concatenation: gradients by finite d
     split_channels(y.act, da.act, db.act);
     for (std::size_t i = 0; i < a.act.floats(); ++i) REQUIRE(da.mem[i] == a.mem[i]);
     for (std::size_t i = 0; i < b.act.floats(); ++i) REQUIRE(db.mem[i] == b.mem[i]);
+  }
+  // Between images: only the named lanes change, except that a copy ending both maps at the
+  // same lane offset (the ConvLSTM's [x, h] with 16-aligned x) brings the zero padding along.
+  for (auto [s0, d0, count, c_dst] : {std::array{5, 21, 14, 40}, std::array{3, 19, 16, 35}, std::array{0, 16, 19, 35}}) {
+    INFO(count << " channels from " << s0 << " to " << d0 << " of " << c_dst);
+    Owned src(3, s0 + count, 2, 3, 31), dst(2, c_dst, 2, 3);
+    std::fill_n(dst.mem.data(), dst.act.floats(), 7.f);
+    copy_channels(src.act, 2, s0, dst.act, 1, d0, count);
+    const bool ends_both = d0 + count == c_dst && s0 % 16 == d0 % 16;
+    for (int n = 0; n < 2; ++n)
+      for (int c = 0; c < dst.act.cb() * 16; ++c)
+        for (std::size_t p = 0; p < 6; ++p) {
+          const float got = *lane_ptr(dst.act, n, c, p);
+          if (n == 1 && c >= d0 && c < d0 + count) REQUIRE(got == *lane_ptr(src.act, 2, c - d0 + s0, p));
+          else if (n == 1 && c >= c_dst && ends_both) REQUIRE(got == 0.f);
+          else REQUIRE(got == 7.f);
+        }
   }
 }
 
