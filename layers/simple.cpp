@@ -43,7 +43,7 @@ void copy_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d
   const std::size_t P = src.pixels();
   const bool ends_both = s0 + count == src.c && d0 + count == dst.c;
   while (count > 0) {
-    int len = std::min({count, 16 - s0 % 16, 16 - d0 % 16});
+    const int len = std::min({count, 16 - s0 % 16, 16 - d0 % 16});
     const int lanes = len == count && ends_both && s0 % 16 == d0 % 16 ? 16 - s0 % 16 : len;
     const float* s = lane_ptr(src, sn, s0, 0);
     float* d = lane_ptr(dst, dn, d0, 0);
