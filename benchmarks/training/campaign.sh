@@ -444,6 +444,13 @@ case "$what" in
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse.json DATA=$DATA_S7 train pose pose-s22-reuse \
       "${POSE_S22_STEPS:-1000}" --occlusion --lr 3e-4 --init "${POSE_S22_INIT:-models/campaign/pose-s21-reuse/checkpoint.h5}" \
       --mask-weights "${POSE_S22_MASK:-models/default.h5}" --mask-reuse "${POSE_S22_REUSE:-16}" ;;
+  # Remixed arms behind stage 1's masks (2026-11-30, twenty-third session): ab-remix (whole
+  # TORE) was paused at step 605 within noise; the shipped stage 2 now reads stage 1's masks.
+  # pose-s22-reuse is the control: the same recipe on ds-s7 (+0.9 +- 1.7 mm, no change).
+  train-pose-s23-remix)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse.json DATA=$DATA_S8 train pose pose-s23-remix \
+      "${POSE_S23_STEPS:-1000}" --occlusion --lr 3e-4 --init "${POSE_S23_INIT:-models/campaign/pose-s21-reuse/checkpoint.h5}" \
+      --mask-weights "${POSE_S23_MASK:-models/default.h5}" --mask-reuse "${POSE_S23_REUSE:-16}" ;;
   ab-mask)
     "$0" train-pose-s19-netmask &
     "$0" train-pose-s19-truemask &

@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -21,6 +22,24 @@ constexpr const char* kSuffix = ".yelan.h5";
 
 [[noreturn]] void fail(const std::string& path, const std::string& what) { recording_error(path, what); }
 
+std::string bytes_text(double bytes) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.3g bytes", bytes);
+  return b;
+}
+
+// A corrupt file can claim a dataset of any size, and the reader sizes its buffer from the
+// claim; deflate expands at most ~1032 times, so what the file stores bounds a real claim.
+void require_stored(hid_t ds, const std::string& path, const std::string& name, const std::vector<hsize_t>& dims,
+                    std::size_t element_bytes) {
+  const std::uint64_t stored = H5Dget_storage_size(ds);
+  double claimed = double(element_bytes);
+  for (hsize_t d : dims) claimed *= double(d);
+  if (claimed > double(1 << 20) + double(stored) * 1100)
+    fail(path, name + " claims " + std::to_string(dims.empty() ? 1 : dims[0]) + " rows (" + bytes_text(claimed) +
+                   ") but stores " + bytes_text(double(stored)));
+}
+
 // Rows of an N x (row dims) dataset, all of them, as mem_type; checks the row shape.
 template <class T>
 std::vector<T> read_all(hid_t f, const std::string& path, const std::string& name, hid_t mem_type,
@@ -33,6 +52,9 @@ std::vector<T> read_all(hid_t f, const std::string& path, const std::string& nam
     fail(path, name + " has the wrong shape");
   std::size_t per = 1;
   for (hsize_t d : row) per *= std::size_t(d);
+  constexpr std::size_t kMaxElements = std::size_t(1) << 26;  // hours of labels at 300 Hz
+  if (dims[0] > kMaxElements / per) fail(path, name + " claims " + std::to_string(dims[0]) + " rows, more than a recording holds");
+  require_stored(ds.get(), path, name, dims, sizeof(T));
   std::vector<T> out(std::size_t(dims[0]) * per);
   if (!out.empty()) h5::check(H5Dread(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()), "read " + name);
   return out;
@@ -48,6 +70,7 @@ void read_whole_recording(const std::string& path) {
   h5::require_numeric(masks.get(), "masks/data");
   const auto dims = h5::shape(masks.get());
   if (dims.size() != 3 || dims[1] != hsize_t(info.camera.height) || dims[2] != hsize_t(info.camera.width)) return;
+  require_stored(masks.get(), path, "masks/data", dims, 1);
   std::vector<std::uint8_t> one(std::size_t(dims[1]) * dims[2]);
   for (hsize_t m = 0; m < dims[0]; ++m) {
     const hsize_t start[3] = {m, 0, 0}, count[3] = {1, dims[1], dims[2]};
@@ -156,6 +179,7 @@ std::vector<std::uint8_t> read_recording_masks(const std::string& path, std::siz
     const auto w = h5::read_scalar_i64(file.get(), "camera/width"), h = h5::read_scalar_i64(file.get(), "camera/height");
     if (!w || !h || *w < 1 || *h < 1 || *w > 65536 || *h > 65536 || dims[1] != hsize_t(*h) || dims[2] != hsize_t(*w))
       fail(path, "masks/data is not masks x camera/height x camera/width");
+    require_stored(masks.get(), path, "masks/data", dims, 1);
     if (first >= dims[0]) return {};
     n = std::min<std::size_t>(n, std::size_t(dims[0]) - first);
     std::vector<std::uint8_t> out(n * std::size_t(dims[1]) * dims[2]);

@@ -10,6 +10,9 @@
 
 #include "camera/io/event_reader.h"
 #include "camera/io/event_writer.h"
+#include "camera/io/format_error.h"
+#include "camera/io/h5.h"
+#include "camera/io/untrusted.h"
 #include "camera/sim/presets.h"
 #include "camera/sim/recording_windows.h"
 
@@ -149,6 +152,44 @@ TEST_CASE("recording windows: files that are not labelled recordings are named w
   RecordingWindowStream s({shortrec}, 1, o);
   SimWindow w;
   CHECK_THROWS_WITH(s.next(w), Catch::Contains("too short"));
+}
+
+// Found by fuzz_recording: a labels/t claiming more rows than a vector can hold threw
+// std::length_error past the reader's error handling and ended the program.
+TEST_CASE("recording windows: a label dataset claiming more rows than the file stores is refused, naming it", "[sim]") {
+  Dir d;
+  const std::string path = record(d, "ben-dance3-front-high-static", 0.3);
+  const std::size_t rows = read_recording_info(path).label_t.size();
+  for (const hsize_t claim : {hsize_t(1) << 62, hsize_t(1) << 40, hsize_t(1) << 22}) {
+    {
+      h5::H5Id f = h5::check(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), "open");
+      if (h5::exists(f.get(), "labels/t")) h5::check(H5Ldelete(f.get(), "labels/t", H5P_DEFAULT), "delete");
+      const hsize_t dims[1] = {claim}, chunk[1] = {1024};
+      h5::H5Id space = h5::check(H5Screate_simple(1, dims, nullptr), "space");
+      h5::H5Id props = h5::check(H5Pcreate(H5P_DATASET_CREATE), "props");
+      h5::check(H5Pset_chunk(props.get(), 1, chunk), "chunk");
+      h5::check(H5Dcreate2(f.get(), "labels/t", H5T_STD_I64LE, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT), "create");
+    }
+    forget_vetted_files();
+    CHECK_THROWS_AS(read_recording_info(path), FormatError);
+    CHECK_THROWS_WITH(read_recording_info(path), Catch::Contains("labels/t") && Catch::Contains("rows"));
+  }
+  CHECK(rows > 10);  // the untouched recording was read whole
+  // The same for the mask pictures, each camera-sized as a real one.
+  std::filesystem::rename(path, d / "labels.yelan.h5");
+  const std::string path2 = record(d, "ben-dance3-front-high-static", 0.3);
+  CHECK(read_recording_masks(path2, 0, 4).size() == 4u * 346 * 260);
+  {
+    h5::H5Id f = h5::check(H5Fopen(path2.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), "open");
+    h5::check(H5Ldelete(f.get(), "masks/data", H5P_DEFAULT), "delete");
+    const hsize_t dims[3] = {hsize_t(1) << 40, 260, 346}, chunk[3] = {1, 260, 346};
+    h5::H5Id space = h5::check(H5Screate_simple(3, dims, nullptr), "space");
+    h5::H5Id props = h5::check(H5Pcreate(H5P_DATASET_CREATE), "props");
+    h5::check(H5Pset_chunk(props.get(), 3, chunk), "chunk");
+    h5::check(H5Dcreate2(f.get(), "masks/data", H5T_STD_U8LE, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT), "create");
+  }
+  forget_vetted_files();
+  CHECK_THROWS_WITH(read_recording_masks(path2, 0, 4), Catch::Contains("masks/data") && Catch::Contains("stores"));
 }
 
 TEST_CASE("recording windows: with history_s the TORE is yelan run's (every event of the file so far), anywhere in it", "[sim]") {
