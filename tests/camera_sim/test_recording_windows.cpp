@@ -40,6 +40,21 @@ std::string record(const Dir& d, const std::string& preset, double seconds) {
   return path;
 }
 
+// Replaces dataset `name` of the recording with a chunked one of `dims` none of whose chunks is
+// written: a claim of any size at no cost on disk, as a corrupt file can make it.
+void claim_unwritten(const std::string& path, const char* name, hid_t type, const std::vector<hsize_t>& dims,
+                     const std::vector<hsize_t>& chunk) {
+  {
+    h5::H5Id f = h5::check(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), "open");
+    h5::check(H5Ldelete(f.get(), name, H5P_DEFAULT), "delete");
+    h5::H5Id space = h5::check(H5Screate_simple(int(dims.size()), dims.data(), nullptr), "space");
+    h5::H5Id props = h5::check(H5Pcreate(H5P_DATASET_CREATE), "props");
+    h5::check(H5Pset_chunk(props.get(), int(chunk.size()), chunk.data()), "chunk");
+    h5::check(H5Dcreate2(f.get(), name, type, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT), "create");
+  }
+  forget_vetted_files();
+}
+
 }  // namespace
 
 TEST_CASE("recording windows: frames on the mask times, TORE of the events since the warm-up, the file's joints and masks", "[sim]") {
@@ -161,16 +176,7 @@ TEST_CASE("recording windows: a label dataset claiming more rows than the file s
   const std::string path = record(d, "ben-dance3-front-high-static", 0.3);
   const std::size_t rows = read_recording_info(path).label_t.size();
   for (const hsize_t claim : {hsize_t(1) << 62, hsize_t(1) << 40, hsize_t(1) << 22}) {
-    {
-      h5::H5Id f = h5::check(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), "open");
-      if (h5::exists(f.get(), "labels/t")) h5::check(H5Ldelete(f.get(), "labels/t", H5P_DEFAULT), "delete");
-      const hsize_t dims[1] = {claim}, chunk[1] = {1024};
-      h5::H5Id space = h5::check(H5Screate_simple(1, dims, nullptr), "space");
-      h5::H5Id props = h5::check(H5Pcreate(H5P_DATASET_CREATE), "props");
-      h5::check(H5Pset_chunk(props.get(), 1, chunk), "chunk");
-      h5::check(H5Dcreate2(f.get(), "labels/t", H5T_STD_I64LE, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT), "create");
-    }
-    forget_vetted_files();
+    claim_unwritten(path, "labels/t", H5T_STD_I64LE, {claim}, {1024});
     CHECK_THROWS_AS(read_recording_info(path), FormatError);
     CHECK_THROWS_WITH(read_recording_info(path), Catch::Contains("labels/t") && Catch::Contains("rows"));
   }
@@ -179,16 +185,7 @@ TEST_CASE("recording windows: a label dataset claiming more rows than the file s
   std::filesystem::rename(path, d / "labels.yelan.h5");
   const std::string path2 = record(d, "ben-dance3-front-high-static", 0.3);
   CHECK(read_recording_masks(path2, 0, 4).size() == 4u * 346 * 260);
-  {
-    h5::H5Id f = h5::check(H5Fopen(path2.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), "open");
-    h5::check(H5Ldelete(f.get(), "masks/data", H5P_DEFAULT), "delete");
-    const hsize_t dims[3] = {hsize_t(1) << 40, 260, 346}, chunk[3] = {1, 260, 346};
-    h5::H5Id space = h5::check(H5Screate_simple(3, dims, nullptr), "space");
-    h5::H5Id props = h5::check(H5Pcreate(H5P_DATASET_CREATE), "props");
-    h5::check(H5Pset_chunk(props.get(), 3, chunk), "chunk");
-    h5::check(H5Dcreate2(f.get(), "masks/data", H5T_STD_U8LE, space.get(), H5P_DEFAULT, props.get(), H5P_DEFAULT), "create");
-  }
-  forget_vetted_files();
+  claim_unwritten(path2, "masks/data", H5T_STD_U8LE, {hsize_t(1) << 40, 260, 346}, {1, 260, 346});
   CHECK_THROWS_WITH(read_recording_masks(path2, 0, 4), Catch::Contains("masks/data") && Catch::Contains("stores"));
 }
 
