@@ -78,6 +78,11 @@ struct Act {
   int cb() const { return (c + 15) / 16; }
   std::size_t pixels() const { return std::size_t(h) * w; }
   std::size_t floats() const { return std::size_t(n) * cb() * pixels() * 16; }
+  // Channel ch of pixel px of image img in the blocked layout (img, ch/16, pixel, ch%16): the
+  // one place that spells the layout's addressing.
+  float* lane(int img, int ch, std::size_t px) const {
+    return data + ((std::size_t(img) * cb() + ch / 16) * pixels() + px) * 16 + ch % 16;
+  }
 };
 
 }  // namespace yelan::layers

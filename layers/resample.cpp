@@ -31,9 +31,7 @@ std::vector<Tap> taps(int in, int out) {
   return t;
 }
 
-float* px(const Act& a, int n, int cb, int y, int x) {
-  return a.data + (((std::size_t(n) * a.cb() + cb) * a.h + y) * a.w + x) * 16;
-}
+float* px(const Act& a, int n, int cb, int y, int x) { return a.lane(n, cb * 16, std::size_t(y) * a.w + x); }
 
 // The input pixels one output pixel of a bilinear resize samples: (i0, j0), (i0, j1), (i1, j0),
 // (i1, j1), with weights from the row's and column's fractions.

@@ -32,9 +32,7 @@ void zero_padding(const Act& y) {
 
 }  // namespace
 
-float* lane_ptr(const Act& a, int n, int c, std::size_t px) {
-  return a.data + ((std::size_t(n) * a.cb() + c / 16) * a.pixels() + px) * 16 + c % 16;
-}
+float* lane_ptr(const Act& a, int n, int c, std::size_t px) { return a.lane(n, c, px); }
 
 // Runs that cross no block boundary on either side: whole blocks are one memcpy, and a U-Net's
 // 24 + 24 channels move 8 or 16 lanes a pixel instead of one. A run that ends both maps (same

@@ -118,12 +118,22 @@ dataset_s7() { dataset_rooms "$DATA_S6" "$DATA_S7" 120 24; }
 # clip 0.25-3 s after the body (named ...-remix); ds-s7's files stay beside them (hard
 # links), so ds-s8 trains on both. Only the remixed members are simulated (about 160).
 DATA_S8=${DATA_S8:-/var/tmp/yelan-data/ds-s8}
-dataset_s8() {
-  link_splits "$DATA_S7" "$DATA_S8"
-  "$Y" sim --dataset "$DATA_S8" --seed 1 --train "${LOOKS_TRAIN:-200}" --val 32 --test 0 --train-empty 96 --val-empty 24 --duration 5s \
+# dataset_arms DIR FLAGS...: ds-s7's files linked into DIR, and its members drawn again with FLAGS.
+dataset_arms() {
+  link_splits "$DATA_S7" "$1"
+  "$Y" sim --dataset "$1" --seed 1 --train "${LOOKS_TRAIN:-200}" --val 32 --test 0 --train-empty 96 --val-empty 24 --duration 5s \
     --random-looks --frame-dancer --train-rooms 128 --val-rooms 48 --train-dancer-rooms 120 --val-dancer-rooms 24 \
-    --remix-arms 0.5 --threads "${THREADS:-2}"
+    "${@:2}" --threads "${THREADS:-2}"
 }
+dataset_s8() { dataset_arms "$DATA_S8" --remix-arms 0.5; }
+
+# ds-s7 and free arms (2026-11-30, twenty-fourth session): remixed arms (ds-s8) recombine the
+# 13 clips' arm poses and moved nothing on their held-out stretches; here half the training
+# dancers (plain and in rooms) are drawn again with both arms moving through key poses drawn
+# anywhere in an arm's range on the clip's body (named ...-free; camera/sim/free_arms.h), arm
+# poses no clip has. ds-s7's files stay beside them (hard links). 162 simulated, 951 s at two threads.
+DATA_S9=${DATA_S9:-/var/tmp/yelan-data/ds-s9}
+dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
 dataset() {
   "$Y" sim --dataset "$DATA" --seed 1 --train 320 --val 32 --test 0 --train-empty 48 --val-empty 8 --duration 5s \
@@ -163,6 +173,7 @@ case "$what" in
   dataset-s6) dataset_s6 ;;
   dataset-s7) dataset_s7 ;;
   dataset-s8) dataset_s8 ;;
+  dataset-s9) dataset_s9 ;;
   train)
     "$0" train-mask-s2 &
     "$0" train-pose &
@@ -451,6 +462,12 @@ case "$what" in
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse.json DATA=$DATA_S8 train pose pose-s23-remix \
       "${POSE_S23_STEPS:-1000}" --occlusion --lr 3e-4 --init "${POSE_S23_INIT:-models/campaign/pose-s21-reuse/checkpoint.h5}" \
       --mask-weights "${POSE_S23_MASK:-models/default.h5}" --mask-reuse "${POSE_S23_REUSE:-16}" ;;
+  # Free arms behind stage 1's masks (2026-11-30, twenty-fourth session): the recipe of
+  # pose-s23-remix and its control pose-s22-reuse exactly, on ds-s9.
+  train-pose-s24-free)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse.json DATA=$DATA_S9 train pose pose-s24-free \
+      "${POSE_S24_STEPS:-1000}" --occlusion --lr 3e-4 --init "${POSE_S24_INIT:-models/campaign/pose-s21-reuse/checkpoint.h5}" \
+      --mask-weights "${POSE_S24_MASK:-models/default.h5}" --mask-reuse "${POSE_S24_REUSE:-16}" ;;
   ab-mask)
     "$0" train-pose-s19-netmask &
     "$0" train-pose-s19-truemask &
@@ -471,7 +488,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12 mask-s15 pose-s17 pose-s17-s4 pose-s18-remix pose-s18-ctl pose-s19-netmask pose-s19-truemask pose-s20-truemask pose-s20-netmask pose-s21-reuse pose-s22-reuse pose-s23-remix mask-s16; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12 mask-s15 pose-s17 pose-s17-s4 pose-s18-remix pose-s18-ctl pose-s19-netmask pose-s19-truemask pose-s20-truemask pose-s20-netmask pose-s21-reuse pose-s22-reuse pose-s23-remix mask-s16 pose-s24-free; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&

@@ -199,6 +199,15 @@ void remix_member_arms(SimSpec& s, std::uint64_t seed, int i, bool room, double 
   s.name += "-remix";
 }
 
+void free_member_arms(SimSpec& s, std::uint64_t seed, int i, bool room, double p) {
+  if (!(p >= 0 && p <= 1)) throw std::invalid_argument("dataset: the share of free arms must be in 0..1");
+  if (p == 0 || !s.dancer || s.arm_offset_s[0] != 0 || s.arm_offset_s[1] != 0) return;
+  Rng r(hash64(seed, split_stream("train") ^ (room ? 0xf4eed007ull : 0xf4eeull), std::uint64_t(i)), 0xf4e1);
+  if (!(r.uniform() < p)) return;
+  s.free_arms_seed = r.bits() | 1;
+  s.name += "-free";
+}
+
 int make_dataset(const DatasetSpec& d, std::ostream& err) {
   if (d.out_dir.empty()) throw std::invalid_argument("dataset: no output folder");
   if (d.train < 0 || d.val < 0 || d.test < 0 || d.train_empty < 0 || d.val_empty < 0 || d.test_empty < 0 ||
@@ -215,6 +224,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   // mix two lightings under one name. Manifests from before the key were drawn at 4 DN.
   const double low_dn = d.low_light_dn ? *d.low_light_dn : lighting(LightLevel::low, false).level;
   if (!(d.remix_arms >= 0 && d.remix_arms <= 1)) throw std::invalid_argument("dataset: the share of remixed arms must be in 0..1");
+  if (!(d.free_arms >= 0 && d.free_arms <= 1)) throw std::invalid_argument("dataset: the share of free arms must be in 0..1");
   if (const fs::path old = fs::path(d.out_dir) / "manifest.json"; fs::exists(old)) {
     std::ifstream in(old);
     nlohmann::json m;
@@ -232,13 +242,19 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
           << low_dn << ": give --low-light-dn " << was << " to add to it, or another folder";
       throw std::invalid_argument(msg.str());
     }
-    // The same for the remixed arms (manifests from before the key had none).
-    const double remixed = m.is_object() && m.contains("remix_arms") && m["remix_arms"].is_number() ? m["remix_arms"].get<double>() : 0.0;
-    if (remixed != d.remix_arms) {
-      std::ostringstream msg;
-      msg << "dataset " << d.out_dir << " was drawn with --remix-arms " << remixed << " (its manifest), this run asks "
-          << d.remix_arms << ": give the manifest's share to add to it, or another folder";
-      throw std::invalid_argument(msg.str());
+    // The same for the remixed and free arms (manifests from before a key had none).
+    struct Share {
+      const char *key, *flag;
+      double asked;
+    };
+    for (const Share& sh : {Share{"remix_arms", "--remix-arms", d.remix_arms}, Share{"free_arms", "--free-arms", d.free_arms}}) {
+      const double was_drawn = m.is_object() && m.contains(sh.key) && m[sh.key].is_number() ? m[sh.key].get<double>() : 0.0;
+      if (was_drawn != sh.asked) {
+        std::ostringstream msg;
+        msg << "dataset " << d.out_dir << " was drawn with " << sh.flag << " " << was_drawn << " (its manifest), this run asks "
+            << sh.asked << ": give the manifest's share to add to it, or another folder";
+        throw std::invalid_argument(msg.str());
+      }
     }
   }
   struct Job {
@@ -255,6 +271,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"frame_dancer", d.frame_dancer},
                                      {"low_light_dn", low_dn},
                                      {"remix_arms", d.remix_arms},
+                                     {"free_arms", d.free_arms},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"room_counts", {{"train", d.train_rooms}, {"val", d.val_rooms}, {"test", d.test_rooms}}},
@@ -271,7 +288,10 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     fs::create_directories(fs::path(d.out_dir) / split);
     for (int i = 0; i < n; ++i) {
       Job j{split, dataset_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
-      if (split == "train") remix_member_arms(j.spec, d.seed, i, false, d.remix_arms);
+      if (split == "train") {
+        remix_member_arms(j.spec, d.seed, i, false, d.remix_arms);
+        free_member_arms(j.spec, d.seed, i, false, d.free_arms);
+      }
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }
@@ -290,7 +310,10 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     const int dancer_rooms = split == "train" ? d.train_dancer_rooms : split == "val" ? d.val_dancer_rooms : d.test_dancer_rooms;
     for (int i = 0; i < dancer_rooms; ++i) {
       Job j{split, dataset_dancer_room_member(split, i, d.seed, d.duration_s, d.random_looks, d.frame_dancer), ""};
-      if (split == "train") remix_member_arms(j.spec, d.seed, i, true, d.remix_arms);
+      if (split == "train") {
+        remix_member_arms(j.spec, d.seed, i, true, d.remix_arms);
+        free_member_arms(j.spec, d.seed, i, true, d.free_arms);
+      }
       j.path = (fs::path(d.out_dir) / split / dataset_file_name(j.spec)).string();
       jobs.push_back(j);
     }

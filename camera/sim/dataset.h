@@ -52,6 +52,11 @@ struct DatasetSpec {
   // ...-remix): arm and body poses the 13 training clips never had together. Drawn from its
   // own stream, so every other member keeps its bytes; validation and test are never remixed.
   double remix_arms = 0;
+  // The share of training dancers (plain and in furnished rooms) whose arms leave their
+  // motion for key poses drawn anywhere in the arm's range (SimSpec::free_arms_seed; named
+  // ...-free): arm poses no clip has, on the clips' bodies. Own stream, as remix_arms; a
+  // member drawn for both is remixed, not freed. Validation and test are never touched.
+  double free_arms = 0;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };
@@ -72,6 +77,9 @@ std::string dataset_file_name(const SimSpec& spec);
 // Training dancer i of a dataset of `seed` with share p of remixed arms: sets its arm
 // offsets and appends "-remix" to its name when the draw says so (room: a dancer-room member).
 void remix_member_arms(SimSpec& spec, std::uint64_t seed, int i, bool room, double p);
+// The same for free arms: sets SimSpec::free_arms_seed and appends "-free" when the draw says
+// so and the member's arms are not remixed.
+void free_member_arms(SimSpec& spec, std::uint64_t seed, int i, bool room, double p);
 
 // Simulates what is missing, in parallel, and writes the manifest (every member's scene as
 // JSON, split, file). Returns the number of recordings simulated now.

@@ -104,6 +104,8 @@ Simulator::Simulator(const SimSpec& spec)
     throw std::invalid_argument("motion segment must satisfy 0 <= begin < end <= 1 and the offset be >= 0 s");
   for (double o : spec.arm_offset_s)
     if (!(o >= 0 && o <= 60)) throw std::invalid_argument("arm offsets must lie in 0..60 s, got " + std::to_string(o));
+  if (spec.free_arms_seed != 0 && (spec.arm_offset_s[0] != 0 || spec.arm_offset_s[1] != 0))
+    throw std::invalid_argument("free arms and remixed arms (arm_offset_s) exclude each other: give one");
   if (!(spec.duration_s > 0) || spec.duration_s > 24 * 3600)
     throw std::invalid_argument("duration must be in (0 s, 24 h], got " + std::to_string(spec.duration_s));
   if (!(spec.label_hz >= 1 && spec.label_hz <= 10000) || !(spec.mask_hz >= 1 && spec.mask_hz <= 1000))
@@ -115,6 +117,7 @@ Simulator::Simulator(const SimSpec& spec)
   pixel_dt_ = spec.max_step_s;
   render_dt_ = std::max(spec.max_render_step_s, spec.max_step_s);
   if (spec.frame_dancer && spec.dancer) frame_motion();
+  if (spec.free_arms_seed != 0) free_arms_ = std::make_unique<FreeArms>(character_.shape, spec.free_arms_seed, spec.duration_s);
 }
 
 void Simulator::frame_motion() {
@@ -163,7 +166,7 @@ BodyPose Simulator::pose_at(double t_s) const {
       const BodyPose m = with_arm_from(body, motion_->at(motion_time(t_s + spec_.arm_offset_s[side])), side);
       for (int point : kRightArmPoints) p.p[point + side] = m.p[point + side];
     }
-  return p;
+  return free_arms_ ? free_arms_->apply(p, t_s) : p;
 }
 
 void Simulator::sample(double t_s) {
@@ -323,6 +326,7 @@ std::string Simulator::description_json() const {
   if (sc.light_dn && *sc.light_dn != lighting(sc.light, false).level) j["light_dn"] = *sc.light_dn;
   if (sc.clutter) j["clutter"] = true;
   if (spec_.arm_offset_s[0] != 0 || spec_.arm_offset_s[1] != 0) j["arm_offset_s"] = spec_.arm_offset_s;
+  if (spec_.free_arms_seed != 0) j["free_arms_seed"] = spec_.free_arms_seed;
   return j.dump();
 }
 

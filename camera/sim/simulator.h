@@ -17,6 +17,7 @@
 #include "camera/sim/body.h"
 #include "camera/sim/characters.h"
 #include "camera/sim/dance.h"
+#include "camera/sim/free_arms.h"
 #include "camera/sim/motion.h"
 #include "camera/sim/pixel_model.h"
 #include "camera/sim/scene.h"
@@ -55,6 +56,10 @@ struct SimSpec {
   // neck in its chest's frame (with_arm_from): arm and body poses the clip never had
   // together. Datasets draw it for some training recordings (--remix-arms).
   std::array<double, 2> arm_offset_s{0, 0};
+  // Nonzero: both arms leave the motion and move through key poses drawn from this seed
+  // anywhere in their range (free_arms.h), hung from the body's shoulders: arm poses no clip
+  // has. Datasets draw it for some training recordings (--free-arms). Not with arm_offset_s.
+  std::uint64_t free_arms_seed = 0;
   SceneConfig scene;
   PixelParams pixel = pixel_params_davis346();
   double duration_s = 2;
@@ -117,12 +122,13 @@ class Simulator {
   // the flicker factor.
   const float* lit(const float* intensity, double t_s);
   double motion_time(double t_s) const;  // clips longer than their motion play back and forth
-  BodyPose pose_at(double t_s) const;    // the motion at t_s, its arms remixed (arm_offset_s)
+  BodyPose pose_at(double t_s) const;    // the motion at t_s, its arms remixed (arm_offset_s) or free
   double image_speed(const BodyPose& a, const BodyPose& b, double dt) const;  // px/s, fastest body point
   BodyPose pose_{}, prev_pose_{};
   SimSpec spec_;
   Character character_;
   std::unique_ptr<Motion> motion_;
+  std::unique_ptr<FreeArms> free_arms_;  // null without SimSpec::free_arms_seed
   void frame_motion();
   Dresser dresser_;
   Scene scene_;

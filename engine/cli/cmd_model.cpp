@@ -217,6 +217,12 @@ int forward(const Args& a, std::ostream& out) {
         dims[0] < 1 || dims[0] % cfg.window)
       throw UsageError(*in + ": input must be S x " + std::to_string(cfg.channels) + " x " + std::to_string(cfg.height()) +
                        " x " + std::to_string(cfg.width()) + " with S a multiple of the window " + std::to_string(cfg.window));
+    // A parity tool's few windows, not a batch runner: a claim of millions of frames (an
+    // unwritten dataset costs nothing on disk) must not size the buffer.
+    constexpr hsize_t kMaxFrames = 1024;
+    if (dims[0] > kMaxFrames)
+      throw UsageError(*in + ": input claims " + std::to_string(dims[0]) + " frames; model forward takes at most " +
+                       std::to_string(kMaxFrames));
     input.resize(dims[0] * dims[1] * dims[2] * dims[3]);
     h5::check(H5Dread(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, input.data()), *in + ": read input");
   }

@@ -51,6 +51,7 @@ const std::vector<Command>& commands() {
        "                 [--train-empty N] [--val-empty N] [--test-empty N] [--random-looks] [--frame-dancer]\n"
        "                 [--train-rooms N] [--val-rooms N] [--test-rooms N] [--low-light-dn DN]\n"
        "                 [--train-dancer-rooms N] [--val-dancer-rooms N] [--test-dancer-rooms N] [--remix-arms P]\n"
+       "                 [--free-arms P]\n"
        "       yelan sim --list\n"
        "A character performs a CMU clip or a procedural dance in a scene; a ray caster renders\n"
        "it at an adaptive rate (>= 1 kHz) and a v2e-style pixel model makes the events. OUT holds\n"
@@ -83,6 +84,10 @@ const std::vector<Command>& commands() {
        "after the body, hung from its neck in its chest's frame: arm and body poses the training\n"
        "clips never had together (scene.json: \"arm_offset_s\": [right, left]); drawn from its own\n"
        "stream, so the other members keep their bytes; val and test are never remixed.\n"
+       "--free-arms P: a share P of the training dancers not remixed (named ...-free) move both\n"
+       "arms through key poses drawn anywhere in an arm's range (overhead, behind, across the\n"
+       "chest, straight or folded) every 0.3-1.2 s, on the clip's body: arm poses no clip has\n"
+       "(scene.json: \"free_arms_seed\": N); its own stream, as --remix-arms.\n"
        "Presets end in any of -occluded, -flicker, -clutter (a furnished room), -pan (the camera\n"
        "turns +-6 deg every 8 s), -shake (a hand-held tremor), -sweep (a hand-held camera looking\n"
        "around, tens of deg/s) and -empty (nobody there).\n",

@@ -116,6 +116,11 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   d.remix_arms = 0.5;
   CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--remix-arms 0"));
   d.remix_arms = 0;
+  // Nor a share of free arms.
+  CHECK((text.str().find("\"free_arms\": 0,") != std::string::npos || text.str().find("\"free_arms\": 0.0,") != std::string::npos));
+  d.free_arms = 0.25;
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--free-arms 0"));
+  d.free_arms = 0;
   // Low light is not in the names: adding at another level than the manifest's is refused.
   d.low_light_dn = 4;
   CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--low-light-dn 20"));
