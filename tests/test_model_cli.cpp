@@ -3,6 +3,7 @@
 #include <hdf5.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -116,20 +117,25 @@ TEST_CASE("yelan model forward writes every head for an input window", "[cli][mo
   const Result bad = cli({"model", "forward", "--weights", dir / "w.h5", "--input", dir / "w.h5", "--output", dir / "x.h5"});
   CHECK(bad.code == 2);
   CHECK_FALSE(std::filesystem::exists(dir / "x.h5"));
-  // so is a window claiming millions of frames (never written: the file stays small)
-  {
-    const hid_t f = H5Fcreate((dir / "huge.h5").c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    const hsize_t dims[4] = {3ull << 20, 6, 37, 75};
-    const hid_t sp = H5Screate_simple(4, dims, nullptr);
+  // so is a window claiming millions of frames, or 2^32 + 6 channels (never written: the
+  // files stay small)
+  const auto unwritten = [&](const char* name, std::array<hsize_t, 4> dims) {
+    const hid_t f = H5Fcreate((dir / name).c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hid_t sp = H5Screate_simple(4, dims.data(), nullptr);
     H5Dclose(H5Dcreate2(f, "input", H5T_NATIVE_FLOAT, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     H5Sclose(sp);
     H5Fclose(f);
-  }
-  REQUIRE(std::filesystem::file_size(dir / "huge.h5") < 100000);
+    REQUIRE(std::filesystem::file_size(dir / name) < 100000);
+  };
+  unwritten("huge.h5", {3ull << 20, 6, 37, 75});
   const Result huge = cli({"model", "forward", "--weights", dir / "w.h5", "--input", dir / "huge.h5", "--output", dir / "y.h5"});
   CHECK(huge.code == 2);
   CHECK(has(huge.err, "3145728 frames"));
   CHECK(has(huge.err, "at most 1024"));
+  unwritten("wide.h5", {3, (1ull << 32) + 6, 37, 75});
+  const Result wide = cli({"model", "forward", "--weights", dir / "w.h5", "--input", dir / "wide.h5", "--output", dir / "y.h5"});
+  CHECK(wide.code == 2);
+  CHECK(has(wide.err, "input must be S x 6 x 37 x 75"));
   CHECK_FALSE(std::filesystem::exists(dir / "y.h5"));
 }
 

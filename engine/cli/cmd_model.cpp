@@ -213,8 +213,9 @@ int forward(const Args& a, std::ostream& out) {
     if (!h5::exists(f.get(), "input")) throw UsageError(*in + ": no dataset 'input' (S x C x H x W float32)");
     h5::H5Id ds = h5::check(H5Dopen2(f.get(), "input", H5P_DEFAULT), *in + ": open input");
     dims = h5::shape(ds.get());
-    if (dims.size() != 4 || int(dims[1]) != cfg.channels || int(dims[2]) != cfg.height() || int(dims[3]) != cfg.width() ||
-        dims[0] < 1 || dims[0] % cfg.window)
+    // Compared as stored (64-bit): a claim of 2^32 + 6 channels must not pass as 6.
+    if (dims.size() != 4 || dims[1] != hsize_t(cfg.channels) || dims[2] != hsize_t(cfg.height()) ||
+        dims[3] != hsize_t(cfg.width()) || dims[0] < 1 || dims[0] % hsize_t(cfg.window))
       throw UsageError(*in + ": input must be S x " + std::to_string(cfg.channels) + " x " + std::to_string(cfg.height()) +
                        " x " + std::to_string(cfg.width()) + " with S a multiple of the window " + std::to_string(cfg.window));
     // A parity tool's few windows, not a batch runner: a claim of millions of frames (an
