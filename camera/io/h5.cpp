@@ -124,6 +124,20 @@ void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t 
   if (rank < 1 || rank > 8 || dims[0] == 0) throw H5Failure("bad chunk shape");
   const auto full = shape(dataset);
   if (full.size() != static_cast<std::size_t>(rank)) throw H5Failure("chunk rank differs from dataset rank");
+  // Filters that cannot make a chunk larger (shuffle, the checksum): libhdf5 copies a whole
+  // chunk's bytes out of what such a pipeline returns without checking its length, so a chunk
+  // stored smaller than its shape is read past its end (fuzz_recording found a pipeline cut
+  // down to shuffle alone). Bit i of `keeps_size` says filter i cannot expand its input.
+  const int nfilters = H5Pget_nfilters(dcpl.get());
+  if (nfilters < 0 || nfilters > 32) throw H5Failure("bad filter pipeline");
+  unsigned keeps_size = 0;
+  for (int i = 0; i < nfilters; ++i) {
+    unsigned flags = 0, config = 0;
+    std::size_t nvalues = 0;
+    const H5Z_filter_t id = H5Pget_filter2(dcpl.get(), static_cast<unsigned>(i), &flags, &nvalues, nullptr, 0, nullptr, &config);
+    if (id == H5Z_FILTER_SHUFFLE || id == H5Z_FILTER_FLETCHER32) keeps_size |= 1u << i;
+  }
+  const std::uint64_t whole = chunk_bytes(dataset);
   hsize_t coord[8] = {};
   for (hsize_t row = first / dims[0] * dims[0]; row < first + n; row += dims[0]) {
     coord[0] = row;
@@ -139,6 +153,10 @@ void check_stored_chunks(hid_t dataset, hsize_t first, hsize_t n, std::uint64_t 
         throw H5Failure("chunk at row " + std::to_string(row) + " claims " + std::to_string(bytes) +
                         " bytes at address " + std::to_string(addr) + " of a " + std::to_string(file_size) +
                         "-byte file");
+      const unsigned applied = ~mask & ((nfilters == 32 ? 0u : 1u << nfilters) - 1u);  // filters not skipped
+      if ((applied & ~keeps_size) == 0 && bytes < whole)
+        throw H5Failure("chunk at row " + std::to_string(row) + " stores " + std::to_string(bytes) + " bytes where its " +
+                        "shape needs " + std::to_string(whole) + " and its filters cannot expand it");
       if (rank > 2) break;
     }
   }

@@ -274,6 +274,22 @@ TEST_CASE("fuzz finding: an HDF5 chunk claiming 4 GB is refused before HDF5 allo
                     p + ": offset 0: HDF5: chunk at row 0 claims 4294964836 bytes at address 14303 of a 15475-byte file");
 }
 
+TEST_CASE("fuzz finding: a chunk stored smaller than its shape behind a shuffle-only pipeline is refused", "[io][h5][bad][fuzz]") {
+  // Found by tests/fuzz/fuzz_recording: a mutated recording whose /events/ms_to_idx lost its
+  // deflate filter, leaving shuffle alone over a 149-byte chunk of a 4096 x 8-byte shape;
+  // libhdf5 then copied 32768 bytes out of the 149 (a heap overflow under ASan).
+  namespace h5 = yelan::camera::h5;
+  const std::string p = (std::filesystem::path(__FILE__).parent_path() / "data" / "fuzz_recording_short_chunk.h5").string();
+  REQUIRE(std::filesystem::exists(p));
+  h5::H5Id f = h5::open_file(p);
+  h5::H5Id ds = h5::check(H5Dopen2(f.get(), "events/ms_to_idx", H5P_DEFAULT), "open ms_to_idx");
+  CHECK_THROWS_WITH(h5::check_stored_chunks(ds.get(), 0, 1, std::filesystem::file_size(p), 1u << 30),
+                    "chunk at row 0 stores 149 bytes where its shape needs 32768 and its filters cannot expand it");
+  // The same file's compressed columns keep passing: deflate may expand what it stores.
+  h5::H5Id t = h5::check(H5Dopen2(f.get(), "events/t", H5P_DEFAULT), "open t");
+  CHECK_NOTHROW(h5::check_stored_chunks(t.get(), 0, 1, std::filesystem::file_size(p), 1u << 30));
+}
+
 TEST_CASE("fuzz finding: a .npy dtype field without its closing parenthesis", "[io][npy][bad][fuzz]") {
   // Found by tests/fuzz/fuzz_npy: the field scan restarted from the top of the header forever.
   ScratchDir dir("npyparen");
