@@ -1,8 +1,10 @@
 #include "weights_tools/widen.h"
 
+#include <functional>
 #include <regex>
 
 #include "engine/mask_net.h"
+#include "engine/pose_net.h"
 #include "weights_tools/network_io.h"
 #include "weights_tools/parse_json.h"
 
@@ -10,74 +12,58 @@ namespace yelan::weights {
 
 namespace {
 
-// For each index along one axis of the wider tensor, the old index it holds, or -1 for a
-// new channel. A concatenated input (an up block's first conv reads [skip | up-sampled])
-// keeps each half's old channels at the front of that half.
-std::vector<std::int64_t> axis_map(std::int64_t old_n, std::int64_t new_n, bool two_halves) {
-  std::vector<std::int64_t> m(std::size_t(new_n), -1);
-  if (!two_halves) {
-    for (std::int64_t j = 0; j < old_n; ++j) m[std::size_t(j)] = j;
-    return m;
+// An axis that concatenates parts (a ConvLSTM's [input | hidden], its four gates, a U-Net
+// block's [skip | up-sampled]) keeps each part's old channels at the front of that part.
+using Parts = std::vector<std::int64_t>;
+
+// How one tensor's axes widen: which axis holds the output channels and which the input
+// channels (PyTorch's layouts), and the parts of each (empty: the whole axis is one part).
+struct Layout {
+  bool transposed = false;
+  Parts out_old, out_new, in_old, in_new;
+};
+using LayoutOf = std::function<Layout(const std::string& name)>;
+
+// For each index along the wider axis, the old index it holds, or -1 for a new channel.
+std::vector<std::int64_t> axis_map(Parts old_parts, Parts new_parts, std::int64_t old_n, std::int64_t new_n, bool* fits) {
+  if (old_parts.empty()) old_parts = {old_n}, new_parts = {new_n};
+  std::int64_t so = 0, sn = 0;
+  for (std::size_t i = 0; i < old_parts.size(); ++i) so += old_parts[i], sn += new_parts[i];
+  *fits = so == old_n && sn == new_n;
+  std::vector<std::int64_t> m(std::size_t(std::max<std::int64_t>(new_n, 0)), -1);
+  if (!*fits) return m;
+  std::int64_t o0 = 0, n0 = 0;
+  for (std::size_t i = 0; i < old_parts.size(); ++i) {
+    if (new_parts[i] < old_parts[i]) *fits = false;
+    for (std::int64_t j = 0; j < std::min(old_parts[i], new_parts[i]); ++j) m[std::size_t(n0 + j)] = o0 + j;
+    o0 += old_parts[i];
+    n0 += new_parts[i];
   }
-  const std::int64_t ho = old_n / 2, hn = new_n / 2;
-  for (std::int64_t j = 0; j < new_n; ++j)
-    if (j % hn < ho) m[std::size_t(j)] = (j / hn) * ho + j % hn;
   return m;
 }
 
-}  // namespace
-
-std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
-                                               const ModelConfig& to, std::uint64_t seed, const std::string& source) {
-  {  // the input section whole, and the mask section but its width (and role, which shapes nothing)
-    const auto a = parse_json(from.json), b = parse_json(to.json);
-    const auto section = [](const auto& d, const char* key) {
-      auto sec = d.contains(key) ? d.at(key) : std::decay_t<decltype(d)>();
-      if (sec.is_object()) {
-        sec.erase("width_mult");
-        sec.erase("role");
-      }
-      return sec;
-    };
-    for (const char* key : {"input", "mask"})
-      if (section(a, key) != section(b, key))
-        throw WeightsError(source + ": widening changes mask.width_mult alone; config '" + to.name + "' also changes its '" +
-                           key + "' section");
-  }
-  if (to.mask_width < from.mask_width)
-    throw WeightsError(source + ": config '" + to.name + "' has a narrower mask net (width_mult " + std::to_string(to.mask_width) +
-                       " < " + std::to_string(from.mask_width) + "); widening only adds channels");
-  {  // the old group must be a whole mask net of `from` (names and shapes, both ways)
-    MaskNet old_net(from);
-    layers::ParamList op;
-    old_net.params(op);
-    Weights w;
-    w.groups["mask"] = old_mask;
-    load_group(w, "mask", op, source);
-  }
-  MaskNet net(to);
-  net.init(seed);
-  layers::ParamList np;
-  net.params(np);
-  std::map<std::string, Tensor> out = group_of(np);
-  static const std::regex cat_input(R"(up\d+\.conv\.double_conv\.0\.weight)");
-  static const std::regex transposed(R"(up\d+\.up\.weight)");
+// `out` holds the wider net's freshly initialised tensors; every old weight is put in its
+// place and every weight reading a new channel into an old one is zeroed.
+void carry_over(const std::map<std::string, Tensor>& old, std::map<std::string, Tensor>& out, const LayoutOf& layout_of,
+                const std::string& group, const std::string& source) {
   for (auto& [name, t] : out) {
-    const Tensor& o = old_mask.at(name);
+    const Tensor& o = old.at(name);
     const std::size_t dims = t.shape.size();
     if (dims == 0) {
       t.data = o.data;
       continue;
     }
-    // Which axis holds the output channels, which the input channels (PyTorch's layouts).
-    const bool is_transposed = std::regex_match(name, transposed);
-    const std::size_t out_axis = is_transposed ? 1 : 0, in_axis = dims >= 2 ? (is_transposed ? 0 : 1) : dims;
+    const Layout l = layout_of(name);
+    const std::size_t out_axis = l.transposed ? 1 : 0, in_axis = dims >= 2 ? (l.transposed ? 0 : 1) : dims;
     std::vector<std::vector<std::int64_t>> maps(dims);
     for (std::size_t a = 0; a < dims; ++a) {
-      const bool halves = a == in_axis && std::regex_match(name, cat_input);
-      if (t.shape[a] < o.shape[a] || (a >= 2 && t.shape[a] != o.shape[a]) || (halves && (t.shape[a] % 2 || o.shape[a] % 2)))
-        throw WeightsError(source + ": mask/" + name + " " + shape_text(o.shape) + " does not widen to " + shape_text(t.shape));
-      maps[a] = axis_map(o.shape[a], t.shape[a], halves);
+      bool fits = o.shape.size() == dims && t.shape[a] >= o.shape[a] && (a < 2 || t.shape[a] == o.shape[a]);
+      if (fits) {
+        const bool is_out = a == out_axis, is_in = a == in_axis;
+        maps[a] = axis_map(is_out ? l.out_old : is_in ? l.in_old : Parts{}, is_out ? l.out_new : is_in ? l.in_new : Parts{},
+                           o.shape[a], t.shape[a], &fits);
+      }
+      if (!fits) throw WeightsError(source + ": " + group + "/" + name + " " + shape_text(o.shape) + " does not widen to " + shape_text(t.shape));
     }
     std::vector<std::int64_t> idx(dims, 0);
     for (std::size_t e = 0; e < t.data.size(); ++e) {
@@ -98,6 +84,106 @@ std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tenso
       }
     }
   }
+}
+
+// `to` may change nothing of the input section, and of `section` only the keys in `free`.
+void check_sections(const ModelConfig& from, const ModelConfig& to, const char* section, std::initializer_list<const char*> free,
+                    const std::string& what, const std::string& source) {
+  const auto a = parse_json(from.json), b = parse_json(to.json);
+  const auto cut = [&](const auto& d, const char* key) {
+    auto sec = d.contains(key) ? d.at(key) : std::decay_t<decltype(d)>();
+    if (sec.is_object() && std::string(key) == section)
+      for (const char* k : free) sec.erase(k);
+    return sec;
+  };
+  for (const char* key : {"input", section})
+    if (cut(a, key) != cut(b, key))
+      throw WeightsError(source + ": widening changes " + what + " alone; config '" + to.name + "' also changes its '" + key +
+                         "' section");
+}
+
+// The old group must be a whole net of `from` (names and shapes, both ways).
+template <class Net>
+void check_fits(const std::map<std::string, Tensor>& group, const char* name, const ModelConfig& from, const std::string& source) {
+  Net old_net(from);
+  layers::ParamList op;
+  old_net.params(op);
+  Weights w;
+  w.groups[name] = group;
+  load_group(w, name, op, source);
+}
+
+template <class Net>
+std::map<std::string, Tensor> fresh_group(const ModelConfig& to, std::uint64_t seed) {
+  Net net(to);
+  net.init(seed);
+  layers::ParamList np;
+  net.params(np);
+  return group_of(np);
+}
+
+}  // namespace
+
+std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
+                                               const ModelConfig& to, std::uint64_t seed, const std::string& source) {
+  check_sections(from, to, "mask", {"width_mult", "role"}, "mask.width_mult", source);  // role shapes nothing
+  if (to.mask_width < from.mask_width)
+    throw WeightsError(source + ": config '" + to.name + "' has a narrower mask net (width_mult " + std::to_string(to.mask_width) +
+                       " < " + std::to_string(from.mask_width) + "); widening only adds channels");
+  check_fits<MaskNet>(old_mask, "mask", from, source);
+  std::map<std::string, Tensor> out = fresh_group<MaskNet>(to, seed);
+  static const std::regex cat_input(R"(up\d+\.conv\.double_conv\.0\.weight)");
+  static const std::regex transposed(R"(up\d+\.up\.weight)");
+  const LayoutOf layout = [&](const std::string& name) {
+    Layout l;
+    l.transposed = std::regex_match(name, transposed);
+    if (std::regex_match(name, cat_input)) {  // [skip | up-sampled], each the level's width
+      const auto& ot = old_mask.at(name);
+      const auto& nt = out.at(name);
+      if (ot.shape.size() >= 2 && nt.shape.size() >= 2 && ot.shape[1] % 2 == 0 && nt.shape[1] % 2 == 0) {
+        l.in_old = {ot.shape[1] / 2, ot.shape[1] / 2};
+        l.in_new = {nt.shape[1] / 2, nt.shape[1] / 2};
+      } else {
+        l.in_old = {-1};  // not two halves: refused as a shape that does not widen
+        l.in_new = {-1};
+      }
+    }
+    return l;
+  };
+  carry_over(old_mask, out, layout, "mask", source);
+  return out;
+}
+
+std::map<std::string, Tensor> widen_pose_group(const std::map<std::string, Tensor>& old_pose, const ModelConfig& from,
+                                               const ModelConfig& to, std::uint64_t seed, const std::string& source) {
+  check_sections(from, to, "pose", {"width_mult", "hidden", "crop_margin"}, "pose.width_mult and pose.hidden", source);
+  if (to.pose_width < from.pose_width || to.hidden < from.hidden)
+    throw WeightsError(source + ": config '" + to.name + "' has a narrower pose net (width_mult " + std::to_string(to.pose_width) +
+                       ", hidden " + std::to_string(to.hidden) + " against " + std::to_string(from.pose_width) + ", " +
+                       std::to_string(from.hidden) + "); widening only adds channels");
+  check_fits<PoseNet>(old_pose, "pose", from, source);
+  std::map<std::string, Tensor> out = fresh_group<PoseNet>(to, seed);
+  const std::int64_t mid_o = from.resnet_mid(), mid_n = to.resnet_mid(), hid_o = from.hidden, hid_n = to.hidden;
+  // The hourglasses' up-sampling block: a transposed 3x3 and a transposed 1x1 shortcut.
+  static const std::regex transposed(R"((xy|zy|xz)_hm_cnns\.\d+\.up_layers\.2\.(module|shortcut)\.0\.weight)");
+  const LayoutOf layout = [&](const std::string& name) {
+    Layout l;
+    l.transposed = std::regex_match(name, transposed);
+    if (name == "cl.cell_list.0.conv.weight" || name == "cl.cell_list.0.conv.bias") {
+      l.out_old = Parts(4, hid_o);  // the gates, a block of hidden channels each
+      l.out_new = Parts(4, hid_n);
+      l.in_old = {mid_o, hid_o};    // [the head's features | the hidden state]
+      l.in_new = {mid_n, hid_n};
+    } else if (name == "cl.fuse_list.0.weight" && from.bidirectional) {
+      l.in_old = {hid_o, hid_o};  // [forward | backward]
+      l.in_new = {hid_n, hid_n};
+    } else if (from.convlstm && (name == "cl_skip_block.module.0.weight" || name == "cl_skip_block.shortcut.0.weight")) {
+      l.in_old = {mid_o, hid_o};  // [the head's features | the ConvLSTM's output]
+      l.in_new = {mid_n, hid_n};
+    }
+    return l;
+  };
+  carry_over(old_pose, out, layout, "pose", source);
   return out;
 }
 

@@ -1,6 +1,6 @@
-// A trained stage 1 carried into a wider U-Net that computes what it computed (up to
-// rounding: the zero terms change the order of the sums): every
-// old weight kept in place, the new channels' own weights freshly initialised, and every
+// A trained stage 1 carried into a wider U-Net, or a trained stage 2 into a wider ResNet head,
+// ConvLSTM and hourglasses, that computes what it computed (up to rounding: the zero terms
+// change the order of the sums): every old weight kept in place, the new channels' own weights freshly initialised, and every
 // weight that reads a new channel into an old one zero. Training then starts from the old
 // net's accuracy instead of from scratch (Net2Net's "wider" idea with zeroed fan-out).
 #pragma once
@@ -18,6 +18,12 @@ namespace yelan::weights {
 // `seed` draws the new channels' weights (MaskNet::init). Throws WeightsError naming
 // `source` when the group does not fit `from` or `to` cannot hold it.
 std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
+                                               const ModelConfig& to, std::uint64_t seed, const std::string& source);
+
+// The same for a pose group: `to` may change pose.width_mult and pose.hidden (neither
+// narrower) and pose.crop_margin, nothing else of the pose or input sections. The ConvLSTM's
+// gates and its concatenated inputs keep each part's old channels at that part's front.
+std::map<std::string, Tensor> widen_pose_group(const std::map<std::string, Tensor>& old_pose, const ModelConfig& from,
                                                const ModelConfig& to, std::uint64_t seed, const std::string& source);
 
 }  // namespace yelan::weights

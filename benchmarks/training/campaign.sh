@@ -468,6 +468,16 @@ case "$what" in
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse.json DATA=$DATA_S9 train pose pose-s24-free \
       "${POSE_S24_STEPS:-1000}" --occlusion --lr 3e-4 --init "${POSE_S24_INIT:-models/campaign/pose-s21-reuse/checkpoint.h5}" \
       --mask-weights "${POSE_S24_MASK:-models/default.h5}" --mask-reuse "${POSE_S24_REUSE:-16}" ;;
+  # Stage 2 twice as wide (pose.width_mult 0.25, hidden 32), widened from the default's
+  # stage 2 (the same outputs), then pose-s24-free's recipe exactly: 1000 steps on ds-s9,
+  # lr 3e-4 cosine, behind the default's stage 1 and its reused masks. Width is the only
+  # difference from pose-s24-free (twenty-fifth session).
+  train-pose-s25-wide)
+    WIDE_CFG=benchmarks/configs/small-mask0.375-pose0.25-masked-reuse-b094-crop8.json
+    [ -f "$RUNS/pose-s25-wide-init.h5" ] ||
+      "$Y" weights widen --weights "${POSE_S25_FROM:-models/default.h5}" --config "$WIDE_CFG" -o "$RUNS/pose-s25-wide-init.h5"
+    CFG=$WIDE_CFG DATA=$DATA_S9 train pose pose-s25-wide "${POSE_S25_STEPS:-1000}" --occlusion --lr 3e-4 \
+      --init "$RUNS/pose-s25-wide-init.h5" --mask-weights "${POSE_S25_MASK:-models/default.h5}" --mask-reuse 16 ;;
   ab-mask)
     "$0" train-pose-s19-netmask &
     "$0" train-pose-s19-truemask &
@@ -488,7 +498,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12 mask-s15 pose-s17 pose-s17-s4 pose-s18-remix pose-s18-ctl pose-s19-netmask pose-s19-truemask pose-s20-truemask pose-s20-netmask pose-s21-reuse pose-s22-reuse pose-s23-remix mask-s16 pose-s24-free; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12 mask-s15 pose-s17 pose-s17-s4 pose-s18-remix pose-s18-ctl pose-s19-netmask pose-s19-truemask pose-s20-truemask pose-s20-netmask pose-s21-reuse pose-s22-reuse pose-s23-remix mask-s16 pose-s24-free pose-s25-wide; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&

@@ -263,17 +263,29 @@ int widen(const Args& a, std::ostream& out) {
   const ModelConfig to = load_model_config(*name);
   weights::Weights w = weights::load_weights(*in);
   const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
-  w.groups["mask"] = weights::widen_mask_group(w.groups["mask"], from, to, std::uint64_t(seed) * 2 + 1, *in);
+  const bool mask = to.mask_width != from.mask_width, pose = to.pose_width != from.pose_width || to.hidden != from.hidden;
+  if (!mask && !pose)
+    throw UsageError("weights widen: config " + to.name + " has the same mask.width_mult, pose.width_mult and pose.hidden as " +
+                     *in + "; nothing to widen");
+  if (mask) w.groups["mask"] = weights::widen_mask_group(w.groups["mask"], from, to, std::uint64_t(seed) * 2 + 1, *in);
+  if (pose) w.groups["pose"] = weights::widen_pose_group(w.groups["pose"], from, to, std::uint64_t(seed) * 2 + 2, *in);
   w.config_json = to.json;
   try {
     const weights::LoadedNetworks fits(w, *in);
   } catch (const std::exception& e) {
-    throw UsageError("weights widen: " + *in + "'s pose group does not fit --config " + *name + ": " + e.what());
+    throw UsageError("weights widen: " + *in + "'s " + (mask && pose ? "widened" : mask ? "pose" : "mask") + " groups do not fit --config " + *name + ": " +
+                     e.what());
   }
   weights::save_weights(*o, w);
-  out << "wrote " << *o << ": mask net widened from width_mult " << from.mask_width << " to " << to.mask_width << " ("
-      << from.unet_width(0) << " -> " << to.unet_width(0) << " channels at the top level; the same outputs), pose from " << *in
-      << ", config " << to.name << " (its run settings, not " << *in << "'s: calibrate after training)\n";
+  out << "wrote " << *o << ":";
+  if (mask)
+    out << " mask net widened from width_mult " << from.mask_width << " to " << to.mask_width << " (" << from.unet_width(0)
+        << " -> " << to.unet_width(0) << " channels at the top level; the same outputs)" << (pose ? ";" : ", pose from " + *in + ",");
+  if (pose)
+    out << " pose net widened from width_mult " << from.pose_width << " to " << to.pose_width << " (" << from.resnet_mid() << " -> "
+        << to.resnet_mid() << " channels into the ConvLSTM, hidden " << from.hidden << " -> " << to.hidden
+        << "; the same outputs)" << (mask ? "," : ", mask from " + *in + ",");
+  out << " config " << to.name << " (its run settings, not " << *in << "'s: calibrate after training)\n";
   return kOk;
 }
 

@@ -1,10 +1,12 @@
-// weights::widen_mask_group and `yelan weights widen`: a wider stage 1 that starts where the
-// narrow one was (same outputs in both BN modes) and can still learn its new channels.
+// weights::widen_mask_group, widen_pose_group and `yelan weights widen`: a wider stage 1 or
+// stage 2 that starts where the narrow one was (same outputs in both BN modes) and can still
+// learn its new channels.
 #include <catch2/catch.hpp>
 
 #include <cmath>
 
 #include "engine/mask_net.h"
+#include "engine/pose_net.h"
 #include "layer_fd.h"
 #include "weights_test_util.h"
 #include "weights_tools/network_io.h"
@@ -26,16 +28,20 @@ ModelConfig tiny_mask(double width, int n_masks = 4) {
                             "test");
 }
 
-struct Net {
-  MaskNet net;
+// A network with its parameter list, a parameter found by its state_dict key.
+template <class N>
+struct Built {
+  N net;
   layers::ParamList params;
-  explicit Net(const ModelConfig& c) : net(c) { net.params(params); }
+  explicit Built(const ModelConfig& c) : net(c) { net.params(params); }
   const layers::Param& param(const std::string& key) const {
     for (const auto& p : params)
       if (p.key == key) return *p.param;
     throw std::logic_error("no parameter " + key);
   }
 };
+using Net = Built<MaskNet>;
+using Pose = Built<PoseNet>;
 
 // The outputs' real lanes: masks, then scores.
 std::vector<float> outputs(MaskNet& net, const layers::Act& x) {
@@ -53,22 +59,28 @@ std::vector<float> outputs(MaskNet& net, const layers::Act& x) {
 
 namespace {
 
-// Outputs of the narrow net and of its widened copy on the same input, in both BN modes.
-void check_same_outputs(Net& a, Net& b, const layers::Act& x) {
+// Outputs of the narrow net and of its widened copy on the same input, in both BN modes: the
+// same up to rounding (the zero terms, batch statistics and softmax sums in another order).
+template <class N, class Outputs>
+void check_same_outputs(Built<N>& a, Built<N>& b, Outputs&& outputs_of, double min_scale, double tolerance) {
   for (const bool training : {false, true}) {
     INFO("training mode " << training);
     a.net.set_training(training);
     b.net.set_training(training);
-    const std::vector<float> ya = outputs(a.net, x), yb = outputs(b.net, x);
+    const std::vector<float> ya = outputs_of(a), yb = outputs_of(b);
     REQUIRE(ya.size() == yb.size());
     double worst = 0, scale = 0;
     for (std::size_t i = 0; i < ya.size(); ++i) {
       worst = std::max(worst, double(std::abs(ya[i] - yb[i])));
       scale = std::max(scale, double(std::abs(ya[i])));
     }
-    CHECK(scale > 0.1);
-    CHECK(worst <= 1e-5 * scale);  // the same up to rounding (the zero terms change the sums' order)
+    CHECK(scale > min_scale);
+    CHECK(worst <= tolerance * scale);
   }
+}
+
+void check_same_outputs(Net& a, Net& b, const layers::Act& x) {
+  check_same_outputs(a, b, [&](Net& n) { return outputs(n.net, x); }, 0.1, 1e-5);
 }
 
 void load_widened(Net& b, const std::map<std::string, weights::Tensor>& group) {
@@ -134,20 +146,30 @@ TEST_CASE("widening the mask net keeps its outputs and leaves the new channels f
   CHECK(g > 0);
 }
 
+namespace {
+
+// `widen` throws a WeightsError naming the old file and `what`.
+template <class F>
+void refuses(F&& widen, const std::string& what) {
+  try {
+    widen();
+    FAIL("no error");
+  } catch (const weights::WeightsError& e) {
+    INFO(e.what());
+    CHECK(has(e.what(), "old.h5"));
+    CHECK(has(e.what(), what));
+  }
+}
+
+}  // namespace
+
 TEST_CASE("widening refuses a narrower net, other outputs and a group that is not the old config's", "[weights][widen]") {
   const ModelConfig narrow = load_model_config("tiny");
   Net a(narrow);
   a.net.init(1);
   const auto group = weights::group_of(a.params);
   const auto fails = [&](const ModelConfig& from, const ModelConfig& to, const std::string& what) {
-    try {
-      weights::widen_mask_group(group, from, to, 1, "old.h5");
-      FAIL("no error");
-    } catch (const weights::WeightsError& e) {
-      INFO(e.what());
-      CHECK(has(e.what(), "old.h5"));
-      CHECK(has(e.what(), what));
-    }
+    refuses([&] { weights::widen_mask_group(group, from, to, 1, "old.h5"); }, what);
   };
   fails(narrow, tiny_mask(0.0625), "narrower");
   fails(narrow, tiny_mask(0.25, 5), "'mask' section");  // n_masks
@@ -155,6 +177,97 @@ TEST_CASE("widening refuses a narrower net, other outputs and a group that is no
   ModelConfig other_input = tiny_mask(0.25);
   other_input.json.replace(other_input.json.find("\"window\": 3"), 11, "\"window\": 4");
   fails(narrow, other_input, "'input' section");
+}
+
+namespace {
+
+ModelConfig tiny_pose(double width, int hidden, const std::string& convlstm) {
+  return parse_model_config(R"({"name": "tiny-pose-wide", "input": {"channels": 6, "sensor_height": 37, "sensor_width": 75,
+    "downscale": 1, "window": 3}, "mask": {"width_mult": 0.125, "n_masks": 4}, "pose": {"width_mult": )" +
+                                std::to_string(width) + R"(, "hidden": )" + std::to_string(hidden) +
+                                R"(, "stages": 2, "joints": 13, "convlstm": ")" + convlstm + R"("}})",
+                            "test");
+}
+
+// The joints and every stage's heatmaps (real lanes) of windows of 3 frames.
+std::vector<float> pose_outputs(Pose& p, const layers::Act& x) {
+  p.net.forward(x, 3);
+  std::vector<float> out = p.net.joints();
+  for (int t = 0; t < 2; ++t)
+    for (int pl = 0; pl < 3; ++pl) {
+      const layers::Act& m = p.net.heatmap(t, pl);
+      for (int n = 0; n < m.n; ++n)
+        for (int c = 0; c < m.c; ++c)
+          for (std::size_t q = 0; q < m.pixels(); ++q) out.push_back(*m.lane(n, c, q));
+    }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("widening the pose net keeps its joints and heatmaps and leaves the new channels free to learn", "[weights][widen]") {
+  for (const std::string mode : {"causal", "bidirectional"}) {
+    INFO("convlstm " << mode);
+    const ModelConfig narrow = tiny_pose(0.125, 12, mode), wide = tiny_pose(0.1875, 20, mode);
+    REQUIRE(wide.resnet_mid() == 24);
+    Pose a(narrow);
+    a.net.init(3);
+    weights::randomise_batchnorm(a.params, 4);
+    const auto old_group = weights::group_of(a.params);
+    Pose b(wide);
+    {
+      weights::Weights w;
+      w.groups["pose"] = weights::widen_pose_group(old_group, narrow, wide, 5, "old.h5");
+      weights::load_group(w, "pose", b.params, "widened");
+      b.net.weights_changed();
+    }
+    test::Owned x(6, narrow.channels, narrow.height(), narrow.width(), 7);
+    check_same_outputs(a, b, [&](Pose& p) { return pose_outputs(p, x.act); }, 0.01, 5e-5);
+    // The gates' conv: [4 x 20 gates] x [24 features | 20 hidden]; old gate g, channel 3 sits
+    // at row g * 20 + 3, the old hidden channel 5 at column 24 + 5; the new features 16..23 and
+    // the new hidden 12..19 read into old gates are zero.
+    const auto& og = old_group.at("cl.cell_list.0.conv.weight");  // [48, 28, k, k]
+    const auto& ng = b.param("cl.cell_list.0.conv.weight");        // [80, 44, k, k]
+    REQUIRE(og.shape[0] == 48);
+    REQUIRE(og.shape[1] == 28);
+    REQUIRE(ng.shape == weights::Shape{80, 44, og.shape[2], og.shape[3]});
+    const std::int64_t kk = og.shape[2] * og.shape[3];
+    for (int g = 0; g < 4; ++g) {
+      CHECK(ng.value[std::size_t(((g * 20 + 3) * 44 + 24 + 5) * kk)] == og.data[std::size_t(((g * 12 + 3) * 28 + 16 + 5) * kk)]);
+      CHECK(ng.value[std::size_t(((g * 20 + 3) * 44 + 2) * kk + 1)] == og.data[std::size_t(((g * 12 + 3) * 28 + 2) * kk + 1)]);
+      CHECK(ng.value[std::size_t(((g * 20 + 3) * 44 + 17) * kk)] == 0.f);
+      CHECK(ng.value[std::size_t(((g * 20 + 3) * 44 + 24 + 13) * kk)] == 0.f);
+    }
+    double new_rows = 0;
+    for (std::int64_t i = 0; i < 44 * kk; ++i) new_rows += std::abs(ng.value[std::size_t((15 * 44) * kk + i)]);
+    CHECK(new_rows > 0);  // gate 0's new channel 15 reads everything, with drawn weights
+
+    // One backward in training mode: the zero weights from new channels get gradients.
+    b.net.set_training(true);
+    b.net.forward(x.act, 3);
+    std::vector<float> dj(b.net.joints().size());
+    for (std::size_t i = 0; i < dj.size(); ++i) dj[i] = float(std::sin(0.7 * double(i) + 1));
+    for (auto& p : b.params)
+      for (std::size_t i = 0; i < p.param->grad.size(); ++i) p.param->grad[i] = 0.f;
+    b.net.backward(x.act, {}, dj.data());
+    double g = 0;
+    for (int gate = 0; gate < 4; ++gate) g += std::abs(ng.grad[std::size_t(((gate * 20 + 3) * 44 + 24 + 13) * kk)]);
+    CHECK(g > 0);
+  }
+}
+
+TEST_CASE("widening the pose net refuses a narrower net and changes beyond its widths", "[weights][widen]") {
+  const ModelConfig narrow = tiny_pose(0.125, 12, "causal");
+  Pose a(narrow);
+  a.net.init(1);
+  const auto group = weights::group_of(a.params);
+  const auto fails = [&](const ModelConfig& from, const ModelConfig& to, const std::string& what) {
+    refuses([&] { weights::widen_pose_group(group, from, to, 1, "old.h5"); }, what);
+  };
+  fails(narrow, tiny_pose(0.0625, 12, "causal"), "narrower");
+  fails(narrow, tiny_pose(0.25, 8, "causal"), "narrower");
+  fails(narrow, tiny_pose(0.25, 12, "bidirectional"), "'pose' section");
+  fails(tiny_pose(0.25, 12, "causal"), tiny_pose(0.375, 12, "causal"), "shape");  // the group is 0.125's
 }
 
 TEST_CASE("yelan weights widen: a file that loads under the wider config and keeps the pose group", "[weights][widen][cli]") {
@@ -197,4 +310,23 @@ TEST_CASE("yelan weights widen: a file that loads under the wider config and kee
   CHECK(narrower.code == 2);
   CHECK(has(narrower.err, "narrower"));
   CHECK(!std::filesystem::exists(dir / "y.h5"));
+  const auto same = yelan_cli({"weights", "widen", "--weights", dir / "x.h5", "--config", dir / "wide.json", "-o", dir / "y.h5"});
+  CHECK(same.code == 2);
+  CHECK(has(same.err, "nothing to widen"));
+
+  // The pose net alone: the mask group stays as it was.
+  {
+    std::ofstream(dir / "wide-pose.json") << R"({"name": "tiny-wide-pose", "input": {"channels": 6, "sensor_height": 37,
+      "sensor_width": 75, "downscale": 1, "window": 3}, "mask": {"width_mult": 0.25, "n_masks": 4}, "pose": {"width_mult":
+      0.25, "hidden": 16, "stages": 2, "joints": 13, "convlstm": "bidirectional"}})";
+  }
+  const auto p = yelan_cli({"weights", "widen", "--weights", dir / "x.h5", "--config", dir / "wide-pose.json", "-o", dir / "p.h5"});
+  INFO(p.err);
+  REQUIRE(p.code == 0);
+  CHECK(has(p.out, "pose net widened from width_mult 0.125 to 0.25 (16 -> 32 channels into the ConvLSTM, hidden 12 -> 16"));
+  CHECK(!has(p.out, "mask net widened"));
+  const weights::Weights wp = weights::load_weights(dir / "p.h5");
+  for (const auto& [k, t] : after.groups.at("mask")) CHECK(wp.groups.at("mask").at(k).data == t.data);
+  CHECK(wp.groups.at("pose").at("in_cnn.0.weight").shape == weights::Shape{16, 6, 7, 7});
+  CHECK_NOTHROW(weights::LoadedNetworks(wp, dir / "p.h5"));
 }

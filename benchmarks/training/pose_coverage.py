@@ -1,0 +1,123 @@
+#!/usr/bin/python3
+"""How well could any net do that only recalls training poses? For each labelled pose of the
+query recordings, the nearest labelled pose of the training recordings (MPJPE over the 13
+joints, both root-aligned at the hip centre), in two frames:
+  camera: the poses as the camera sees them (facing and pitch included), the lookup a net
+          would make from the image alone;
+  body:   each pose turned about the world's vertical so its hips face one way, the
+          lookup if the facing were known: how much of the motion itself the training
+          data holds.
+Printed per motion family (CMU clip or procedural dance), beside the per-view mean pose
+of the training poses (the floor yelan eval prints, here on these poses).
+
+usage: pose_coverage.py --train DIR [DIR...] --query DIR [--label-step 10] [--query-step 6]
+"""
+import argparse
+import json
+import os
+import sys
+
+import h5py
+import numpy as np
+
+HIP_R, HIP_L = 5, 6
+HAND_R, HAND_L = 7, 8
+
+
+def recordings(folder):
+    for name in sorted(os.listdir(folder)):
+        if name.endswith(".yelan.h5"):
+            yield os.path.join(folder, name)
+
+
+def load(folder, step):
+    """(poses_cam, poses_body, view, family) of every dancer recording's labels, every
+    step-th label, root-aligned, joints never invalid."""
+    cam, body, views, fams, recs = [], [], [], [], []
+    for path in recordings(folder):
+        with h5py.File(path, "r") as f:
+            if not int(f.attrs.get("dancer", 0)) or "labels" not in f:
+                continue
+            j = f["labels/joints"][::step].astype(np.float64)
+            valid = f["labels/valid"][::step].astype(bool)
+            M = f["camera/M"][()]
+            scene = json.loads(f.attrs["scene"])
+        keep = valid.all(axis=1)
+        j = j[keep]
+        if len(j) == 0:
+            continue
+        root = 0.5 * (j[:, HIP_R] + j[:, HIP_L])
+        rel = j - root[:, None, :]
+        # camera -> world rotation: M = [R | t] maps world to camera, so world = R^T cam.
+        R = M[:, :3]
+        w = rel @ R  # (n, 13, 3): each row r -> R^T r
+        hips = w[:, HIP_L] - w[:, HIP_R]
+        ang = np.arctan2(hips[:, 1], hips[:, 0])
+        c, s = np.cos(-ang), np.sin(-ang)
+        b = w.copy()
+        b[..., 0] = c[:, None] * w[..., 0] - s[:, None] * w[..., 1]
+        b[..., 1] = s[:, None] * w[..., 0] + c[:, None] * w[..., 1]
+        cam.append(rel)
+        body.append(b)
+        views += [scene["view"]] * len(j)
+        motion = scene["motion"]
+        fams += ["procedural" if motion == "dance" else "CMU"] * len(j)
+        recs += [os.path.basename(path)] * len(j)
+    return (np.concatenate(cam), np.concatenate(body), np.array(views), np.array(fams), np.array(recs))
+
+
+def nearest_mpjpe(train, query, shortlist=16, chunk=512):
+    """Per query pose, the smallest MPJPE to any training pose (L2 shortlist, exact MPJPE)."""
+    T = train.reshape(len(train), -1)
+    tn = (T * T).sum(1)
+    out = np.empty(len(query))
+    hands = np.empty(len(query))
+    for i in range(0, len(query), chunk):
+        q = query[i:i + chunk]
+        Q = q.reshape(len(q), -1)
+        d2 = (Q * Q).sum(1)[:, None] - 2 * Q @ T.T + tn[None, :]
+        idx = np.argpartition(d2, shortlist, axis=1)[:, :shortlist]
+        cand = train[idx]  # (m, k, 13, 3)
+        err = np.linalg.norm(cand - q[:, None], axis=3)  # (m, k, 13)
+        m = err.mean(axis=2)
+        best = m.argmin(axis=1)
+        out[i:i + chunk] = m[np.arange(len(q)), best]
+        hands[i:i + chunk] = err[np.arange(len(q)), best][:, [HAND_R, HAND_L]].mean(axis=1)
+    return out, hands
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--train", nargs="+", required=True)
+    ap.add_argument("--query", required=True)
+    ap.add_argument("--label-step", type=int, default=10, help="every n-th training label (300 Hz)")
+    ap.add_argument("--query-step", type=int, default=6, help="every n-th query label")
+    a = ap.parse_args()
+    parts = [load(d, a.label_step) for d in a.train]
+    tc, tb, tv = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    qc, qb, qv, qf, _ = load(a.query, a.query_step)
+    print(f"training poses {len(tc)} from {' '.join(a.train)}; query poses {len(qc)} from {a.query}")
+    nn_cam = np.empty(len(qc)); nn_cam_h = np.empty(len(qc))
+    floor = np.empty(len(qc))
+    for v in np.unique(qv):
+        sel, tsel = qv == v, tv == v
+        nn_cam[sel], nn_cam_h[sel] = nearest_mpjpe(tc[tsel], qc[sel])
+        mean = tc[tsel].mean(axis=0)
+        floor[sel] = np.linalg.norm(qc[sel] - mean, axis=2).mean(axis=1)
+    nn_body, nn_body_h = nearest_mpjpe(tb, qb)
+    print(f"{'family':<12}{'poses':>7}{'per-view mean (floor)':>23}{'nearest, camera':>17}{'nearest, body':>15}"
+          f"{'hands cam/body':>16}")
+    for fam in ["all", "CMU", "procedural"]:
+        sel = np.ones(len(qc), bool) if fam == "all" else qf == fam
+        if not sel.any():
+            continue
+        print(f"{fam:<12}{sel.sum():>7}{floor[sel].mean():>23.1f}{nn_cam[sel].mean():>17.1f}{nn_body[sel].mean():>15.1f}"
+              f"{nn_cam_h[sel].mean():>9.1f} /{nn_body_h[sel].mean():>5.1f}")
+    for q in (50, 90):
+        print(f"  CMU {q}th percentile: camera {np.percentile(nn_cam[qf == 'CMU'], q):.1f}, "
+              f"body {np.percentile(nn_body[qf == 'CMU'], q):.1f} mm")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
