@@ -495,6 +495,26 @@ case "$what" in
     done
     CFG=benchmarks/configs/small-pose0.125-nomask.json DATA="$fit/train" train pose fit16 "${FIT16_STEPS:-3000}" \
       --val-data "$fit/val" --lr 1e-3 --init "${FIT16_INIT:-models/default.h5}" ;;
+  # How many recordings can stage 2 fit? FIT_N of ds-s9's plain training dancers (every
+  # k-th, k spreading them over the split), trained and validated on the same FIT_N from the
+  # default's stage 2 (FIT_INIT; with FIT_CFG another width, started by weights widen), lr 1e-3
+  # cosine, behind the default's stage 1 as deployed; FIT_STEPS defaults to 16 steps a
+  # recording (about 125 visits each at batch 8, fit16's), so runs of different FIT_N see
+  # each recording as often. Twenty-fifth session: the nets sit at 81% of the per-view floor
+  # on their own training recordings while fit16 memorised 16.
+  fit-n)
+    n="${FIT_N:-64}"
+    name="fit-n$n${FIT_TAG:+-$FIT_TAG}"
+    fit="/var/tmp/yelan-data/$name"
+    mkdir -p "$fit/train" "$fit/val"
+    total=$(ls "$DATA_S9/train" | grep -v -- '-empty-\|-room-' | wc -l)
+    ls "$DATA_S9/train" | grep -v -- '-empty-\|-room-' | awk -v k=$((total / n)) 'NR % k == 1' | head -"$n" | while read -r f; do
+      ln -f "$DATA_S9/train/$f" "$fit/train/"
+      ln -f "$DATA_S9/train/$f" "$fit/val/"
+    done
+    CFG="${FIT_CFG:-benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8.json}" DATA="$fit/train" \
+      train pose "$name" "${FIT_STEPS:-$((16 * n))}" --val-data "$fit/val" --lr 1e-3 --init "${FIT_INIT:-models/default.h5}" \
+      --mask-weights models/default.h5 --mask-reuse 16 ;;
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)

@@ -8,9 +8,12 @@ joints, both root-aligned at the hip centre), in two frames:
           lookup if the facing were known: how much of the motion itself the training
           data holds.
 Printed per motion family (CMU clip or procedural dance), beside the per-view mean pose
-of the training poses (the floor yelan eval prints, here on these poses).
+of the training poses (the floor yelan eval prints, here on these poses). --eval E.json (the
+`yelan eval --json` of a net on the query recordings, scored over their first --seconds):
+per recording, how the net's root-aligned error follows the lookup's distance and the floor.
 
 usage: pose_coverage.py --train DIR [DIR...] --query DIR [--label-step 10] [--query-step 6]
+                        [--seconds S] [--eval E.json ...]
 """
 import argparse
 import json
@@ -30,9 +33,9 @@ def recordings(folder):
             yield os.path.join(folder, name)
 
 
-def load(folder, step):
-    """(poses_cam, poses_body, view, family) of every dancer recording's labels, every
-    step-th label, root-aligned, joints never invalid."""
+def load(folder, step, seconds=None):
+    """(poses_cam, poses_body, view, family, recording) of every dancer recording's labels,
+    every step-th label (of the first `seconds`), root-aligned, joints never invalid."""
     cam, body, views, fams, recs = [], [], [], [], []
     for path in recordings(folder):
         with h5py.File(path, "r") as f:
@@ -40,9 +43,12 @@ def load(folder, step):
                 continue
             j = f["labels/joints"][::step].astype(np.float64)
             valid = f["labels/valid"][::step].astype(bool)
+            t = f["labels/t"][::step]
             M = f["camera/M"][()]
             scene = json.loads(f.attrs["scene"])
         keep = valid.all(axis=1)
+        if seconds is not None:
+            keep &= t - t[0] < seconds * 1e6
         j = j[keep]
         if len(j) == 0:
             continue
@@ -62,7 +68,7 @@ def load(folder, step):
         views += [scene["view"]] * len(j)
         motion = scene["motion"]
         fams += ["procedural" if motion == "dance" else "CMU"] * len(j)
-        recs += [os.path.basename(path)] * len(j)
+        recs += [os.path.basename(path).split(".")[0]] * len(j)
     return (np.concatenate(cam), np.concatenate(body), np.array(views), np.array(fams), np.array(recs))
 
 
@@ -92,10 +98,12 @@ def main():
     ap.add_argument("--query", required=True)
     ap.add_argument("--label-step", type=int, default=10, help="every n-th training label (300 Hz)")
     ap.add_argument("--query-step", type=int, default=6, help="every n-th query label")
+    ap.add_argument("--seconds", type=float, help="only the query recordings' first seconds")
+    ap.add_argument("--eval", nargs="*", default=[], help="yelan eval --json of nets on the query recordings")
     a = ap.parse_args()
     parts = [load(d, a.label_step) for d in a.train]
     tc, tb, tv = (np.concatenate([p[i] for p in parts]) for i in range(3))
-    qc, qb, qv, qf, _ = load(a.query, a.query_step)
+    qc, qb, qv, qf, qr = load(a.query, a.query_step, a.seconds)
     print(f"training poses {len(tc)} from {' '.join(a.train)}; query poses {len(qc)} from {a.query}")
     nn_cam = np.empty(len(qc)); nn_cam_h = np.empty(len(qc))
     floor = np.empty(len(qc))
@@ -116,6 +124,16 @@ def main():
     for q in (50, 90):
         print(f"  CMU {q}th percentile: camera {np.percentile(nn_cam[qf == 'CMU'], q):.1f}, "
               f"body {np.percentile(nn_body[qf == 'CMU'], q):.1f} mm")
+    for path in a.eval:
+        per_scene = json.load(open(path))["by_condition"]["scene"]
+        names = [r for r in np.unique(qr) if r in per_scene]
+        net = np.array([per_scene[r]["mpjpe_root_mm"] for r in names])
+        nn = np.array([nn_cam[qr == r].mean() for r in names])
+        fl = np.array([floor[qr == r].mean() for r in names])
+        print(f"{path}: {len(names)} recordings, the net's root-aligned MPJPE {net.mean():.1f} mm; per recording its "
+              f"correlation with the lookup's distance {np.corrcoef(net, nn)[0, 1]:.2f}, with the floor "
+              f"{np.corrcoef(net, fl)[0, 1]:.2f}; net / lookup {np.median(net / nn):.2f}, net / floor {np.median(net / fl):.2f} "
+              f"(medians)")
     return 0
 
 
