@@ -518,7 +518,7 @@ case "$what" in
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12 mask-s15 pose-s17 pose-s17-s4 pose-s18-remix pose-s18-ctl pose-s19-netmask pose-s19-truemask pose-s20-truemask pose-s20-netmask pose-s21-reuse pose-s22-reuse pose-s23-remix mask-s16 pose-s24-free pose-s25-wide; do
+    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12 mask-s15 pose-s17 pose-s17-s4 pose-s18-remix pose-s18-ctl pose-s19-netmask pose-s19-truemask pose-s20-truemask pose-s20-netmask pose-s21-reuse pose-s22-reuse pose-s23-remix mask-s16 pose-s24-free pose-s25-wide fit-n64; do
       [ -d "$RUNS/$run" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
