@@ -63,7 +63,9 @@ void carry_over(const std::map<std::string, Tensor>& old, std::map<std::string, 
         maps[a] = axis_map(is_out ? l.out_old : is_in ? l.in_old : Parts{}, is_out ? l.out_new : is_in ? l.in_new : Parts{},
                            o.shape[a], t.shape[a], &fits);
       }
-      if (!fits) throw WeightsError(source + ": " + group + "/" + name + " " + shape_text(o.shape) + " does not widen to " + shape_text(t.shape));
+      if (!fits)
+        throw WeightsError(source + ": " + group + "/" + name + " " + shape_text(o.shape) + " does not widen to " +
+                           shape_text(t.shape));
     }
     std::vector<std::int64_t> idx(dims, 0);
     for (std::size_t e = 0; e < t.data.size(); ++e) {
@@ -138,15 +140,10 @@ std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tenso
     Layout l;
     l.transposed = std::regex_match(name, transposed);
     if (std::regex_match(name, cat_input)) {  // [skip | up-sampled], each the level's width
-      const auto& ot = old_mask.at(name);
-      const auto& nt = out.at(name);
-      if (ot.shape.size() >= 2 && nt.shape.size() >= 2 && ot.shape[1] % 2 == 0 && nt.shape[1] % 2 == 0) {
-        l.in_old = {ot.shape[1] / 2, ot.shape[1] / 2};
-        l.in_new = {nt.shape[1] / 2, nt.shape[1] / 2};
-      } else {
-        l.in_old = {-1};  // not two halves: refused as a shape that does not widen
-        l.in_new = {-1};
-      }
+      // An odd width is not two halves: the parts then miss the axis, which carry_over refuses.
+      const std::int64_t o = old_mask.at(name).shape.at(1), n = out.at(name).shape.at(1);
+      l.in_old = {o / 2, o / 2};
+      l.in_new = {n / 2, n / 2};
     }
     return l;
   };

@@ -1,8 +1,9 @@
 // A trained stage 1 carried into a wider U-Net, or a trained stage 2 into a wider ResNet head,
 // ConvLSTM and hourglasses, that computes what it computed (up to rounding: the zero terms
-// change the order of the sums): every old weight kept in place, the new channels' own weights freshly initialised, and every
-// weight that reads a new channel into an old one zero. Training then starts from the old
-// net's accuracy instead of from scratch (Net2Net's "wider" idea with zeroed fan-out).
+// change the order of the sums): every old weight kept in place, the new channels' own
+// weights freshly initialised, and every weight that reads a new channel into an old one
+// zero. Training then starts from the old net's accuracy instead of from scratch (Net2Net's
+// "wider" idea with zeroed fan-out).
 #pragma once
 #include <cstdint>
 #include <map>

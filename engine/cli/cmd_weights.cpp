@@ -273,8 +273,8 @@ int widen(const Args& a, std::ostream& out) {
   try {
     const weights::LoadedNetworks fits(w, *in);
   } catch (const std::exception& e) {
-    throw UsageError("weights widen: " + *in + "'s " + (mask && pose ? "widened" : mask ? "pose" : "mask") + " groups do not fit --config " + *name + ": " +
-                     e.what());
+    const std::string groups = mask && pose ? "widened" : mask ? "pose" : "mask";
+    throw UsageError("weights widen: " + *in + "'s " + groups + " groups do not fit --config " + *name + ": " + e.what());
   }
   weights::save_weights(*o, w);
   out << "wrote " << *o << ":";
