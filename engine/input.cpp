@@ -1,5 +1,6 @@
 #include "engine/input.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -7,34 +8,59 @@
 namespace yelan::input {
 
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
+  downscale_tore(vol, sensor_h, sensor_w, d, a, n, camera::PixelRect{0, 0, a.w, a.h});
+}
+
+void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n,
+                    camera::PixelRect r) {
   const int C = a.c, H = a.h, W = a.w;
   if (vol.size() != std::size_t(C) * sensor_h * sensor_w || std::size_t(H) * d > std::size_t(sensor_h) ||
       std::size_t(W) * d > std::size_t(sensor_w))
     throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values does not fill " +
                                 std::to_string(C) + " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
+  r = {std::max(r.x0, 0), std::max(r.y0, 0), std::min(r.x1, W), std::min(r.y1, H)};
+  if (r.empty()) return;
   const float inv = 1.f / float(d * d);
   // Row sums first (contiguous, vectorised), then one strided store per output value into
   // the 16-lane layout; the additions run in the plain (dy, dx) order, so the result is
   // bit-identical to summing each cell on its own.
-  std::vector<float> row(static_cast<std::size_t>(W));
+  const int rw = r.x1 - r.x0;
+  std::vector<float> row(static_cast<std::size_t>(rw));
   for (int c = 0; c < C; ++c) {
     float* out = a.data + (std::size_t(n) * a.cb() + c / 16) * a.pixels() * 16 + c % 16;
-    const float* in = vol.data() + std::size_t(c) * sensor_h * sensor_w;
-    for (int y = 0; y < H; ++y) {
+    const float* in = vol.data() + std::size_t(c) * sensor_h * sensor_w + std::size_t(r.x0) * d;
+    for (int y = r.y0; y < r.y1; ++y) {
       const float* r0 = in + std::size_t(y) * d * sensor_w;
       if (d == 2) {
         const float* r1 = r0 + sensor_w;
-        for (int x = 0; x < W; ++x) row[std::size_t(x)] = r0[2 * x] + r0[2 * x + 1] + r1[2 * x] + r1[2 * x + 1];
+        for (int x = 0; x < rw; ++x) row[std::size_t(x)] = r0[2 * x] + r0[2 * x + 1] + r1[2 * x] + r1[2 * x + 1];
       } else {
         std::fill(row.begin(), row.end(), 0.f);
         for (int dy = 0; dy < d; ++dy)
-          for (int x = 0; x < W; ++x)
+          for (int x = 0; x < rw; ++x)
             for (int dx = 0; dx < d; ++dx) row[std::size_t(x)] += r0[std::size_t(dy) * sensor_w + x * d + dx];
       }
-      float* o = out + std::size_t(y) * W * 16;
-      for (int x = 0; x < W; ++x) o[std::size_t(x) * 16] = row[std::size_t(x)] * inv;
+      float* o = out + (std::size_t(y) * W + r.x0) * 16;
+      for (int x = 0; x < rw; ++x) o[std::size_t(x) * 16] = row[std::size_t(x)] * inv;
     }
   }
+}
+
+void tore_input(const camera::ToreVolume& tore, std::int64_t t, int d, const layers::Act& a, int n,
+                camera::PixelRect r) {
+  if (a.c != tore.channels() || std::size_t(a.h) * d > std::size_t(tore.height()) ||
+      std::size_t(a.w) * d > std::size_t(tore.width()))
+    throw std::invalid_argument("TORE of " + std::to_string(tore.channels()) + " channels at " + std::to_string(tore.width()) +
+                                "x" + std::to_string(tore.height()) + " does not fill an input of " + std::to_string(a.c) +
+                                "x" + std::to_string(a.w) + "x" + std::to_string(a.h) + " at downscale " + std::to_string(d));
+  r = {std::max(r.x0, 0), std::max(r.y0, 0), std::min(r.x1, a.w), std::min(r.y1, a.h)};
+  if (a.c > 16) {  // more than one channel block: not pixel-interleaved, go through the volume
+    std::vector<float> vol(tore.volume_size());
+    tore.readout(t, vol.data(), camera::PixelRect{r.x0 * d, r.y0 * d, r.x1 * d, r.y1 * d});
+    downscale_tore(vol, tore.height(), tore.width(), d, a, n, r);
+    return;
+  }
+  tore.readout_mean(t, d, a.data + std::size_t(n) * a.cb() * a.pixels() * 16, a.w, 16, r);
 }
 
 void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep, float cut) {

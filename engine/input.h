@@ -6,6 +6,7 @@
 #pragma once
 #include <vector>
 
+#include "camera/repr/tore.h"
 #include "layers/buffer.h"
 
 namespace yelan::input {
@@ -13,6 +14,16 @@ namespace yelan::input {
 // Mean of each d x d cell of a volume (C x H x W, channel-major, the sensor's size) into frame
 // n of a blocked activation of the model's input size.
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n);
+// The same for the output pixels inside `out_rect` (the input's coordinates, clipped) alone;
+// the rest of frame n is left as it was.
+void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n,
+                    camera::PixelRect out_rect);
+
+// The same straight from the TORE at time t (ToreVolume::readout_mean: no full-size volume in
+// between; bit-identical to readout() and downscale_tore()), for the input pixels inside
+// `out_rect` alone.
+void tore_input(const camera::ToreVolume& tore, std::int64_t t, int d, const layers::Act& a, int n,
+                camera::PixelRect out_rect);
 
 // Where yelan run binarises a mask (sigmoid above it: the dancer).
 inline constexpr float kMaskCut = 0.1f;

@@ -40,6 +40,10 @@ struct ModelConfig {
   // (33 x 44 at input downscale 2), at about three times stage 2's multiply-adds. A body
   // filling the frame spans 16 heatmap cells at stride 8, 106 mm a cell.
   int head_stride = 8;
+  // pose.hourglass_skip (not the paper's; default false): each hourglass adds its second
+  // block's output (mid resolution) to its up block's, so the heatmaps see the mid resolution
+  // past the half-resolution bottleneck; the same parameters.
+  bool hourglass_skip = false;
   // input.representation: "tore" (2K = channels TORE planes) or "counts" (2 channels: events
   // of each polarity in the last frame period, log(1 + n); the constant-time-frame baseline)
   std::string representation = "tore";

@@ -33,7 +33,8 @@ PoseNet::PoseNet(const ModelConfig& cfg)
   for (int t = 0; t < cfg.stages; ++t) {
     if (t > 0) stages_[t].combiner = std::make_unique<layers::ResidualBlock>(3 * cfg.joints, mid, layers::ResidualKind::regular);
     for (auto& p : stages_[t].planes)
-      p = std::make_unique<layers::HourglassStage>(mid, cfg.joints, cfg.hourglass_lo(), cfg.hourglass_hi(), mid_h_, mid_w_);
+      p = std::make_unique<layers::HourglassStage>(mid, cfg.joints, cfg.hourglass_lo(), cfg.hourglass_hi(), mid_h_, mid_w_,
+                                                   cfg.hourglass_skip);
   }
 }
 

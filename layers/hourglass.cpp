@@ -1,12 +1,17 @@
 #include "layers/hourglass.h"
 
+#include <cstring>
 #include <vector>
 
 #include "kernels/heatmap.h"
 
 namespace yelan::layers {
 
-HourglassStage::HourglassStage(int in, int joints, int lo, int hi, int mid_h, int mid_w) {
+namespace {
+constexpr std::size_t kSkipFrom = 1, kSkipTo = 7;  // the second down block's output -> the up block's
+}
+
+HourglassStage::HourglassStage(int in, int joints, int lo, int hi, int mid_h, int mid_w, bool skip) : skip_(skip) {
   using K = ResidualKind;
   auto add = [&](int a, int b, K k, int oph = 0, int opw = 0) {
     blocks_.push_back(std::make_unique<ResidualBlock>(a, b, k, oph, opw));
@@ -41,8 +46,13 @@ void HourglassStage::weights_changed() {
 Act HourglassStage::forward(const Act& x) {
   inputs_.assign(1, x);
   Act a = x;
-  for (auto& b : blocks_) {
-    a = b->forward(a);
+  for (std::size_t i = 0; i < blocks_.size(); ++i) {
+    a = blocks_[i]->forward(a);
+    if (skip_ && i == kSkipTo) {
+      const Act sum = sum_.like(a);
+      add_forward(a, inputs_[kSkipFrom + 1], sum);
+      a = sum;
+    }
     inputs_.push_back(a);
   }
   inputs_.pop_back();  // inputs_[i] is block i's input
@@ -56,6 +66,11 @@ void HourglassStage::backward(const Act& x, const Act& dy, const Act& dx) {
     const Act d = i == 0 ? dx : (i % 2 ? grad_a_ : grad_b_).like(in);
     blocks_[i]->backward(in, g, d);
     g = d;
+    if (skip_ && i == kSkipTo + 1) {  // g: dL/d(the sum), which both addends receive
+      const Act keep = dsum_.like(g);
+      std::memcpy(keep.data, g.data, g.floats() * sizeof(float));
+    }
+    if (skip_ && i == kSkipFrom + 1) accumulate(dsum_.act, g);
   }
 }
 

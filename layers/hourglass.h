@@ -1,6 +1,9 @@
 // One hourglass stage of one plane (SPEC 5): down_layers = regular(in->lo), regular(lo),
 // down(lo->hi), regular(hi), regular(hi); up_layers = regular(hi), regular(hi),
 // up(hi->lo, output_padding (H%2==0, W%2==0) of the mid size), regular(lo), regular(lo->J).
+// With skip (pose.hourglass_skip, not the paper's): the up block's output plus the second
+// down block's (both lo x mid size), so the mid resolution reaches the heatmaps without
+// passing through the half-resolution bottleneck; no parameters added.
 #pragma once
 #include <memory>
 #include <vector>
@@ -11,7 +14,7 @@ namespace yelan::layers {
 
 class HourglassStage {
  public:
-  HourglassStage(int in, int joints, int lo, int hi, int mid_h, int mid_w);
+  HourglassStage(int in, int joints, int lo, int hi, int mid_h, int mid_w, bool skip = false);
   void params(const std::string& prefix, ParamList& out);
   void init(std::uint64_t seed);
   void set_training(bool on);
@@ -23,6 +26,8 @@ class HourglassStage {
   std::vector<std::unique_ptr<ResidualBlock>> blocks_;  // 5 down then 5 up
   std::vector<Act> inputs_;                             // each block's input in the last forward
   ActBuf grad_a_, grad_b_;
+  bool skip_ = false;
+  ActBuf sum_, dsum_;  // the skip's sum (block 8's input) and its gradient
 };
 
 // Flat spatial softmax of every map, and DSNT read-out of 3D joints from the xy, zy, xz

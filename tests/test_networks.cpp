@@ -352,6 +352,35 @@ TEST_CASE("pose net at head_stride 4: the same parameters, heatmaps twice as fin
   for (std::size_t i = 0; i < whole.size(); ++i) REQUIRE(fine.joints()[i] == Approx(whole[i]).margin(1e-5));
 }
 
+TEST_CASE("pose net with hourglass_skip: the same parameters, other joints, gradients by finite differences", "[networks][pose]") {
+  const ModelConfig base = load_model_config("tiny");
+  std::string text = base.json;
+  text.insert(text.find("\"convlstm\""), "\"hourglass_skip\": true, ");
+  const ModelConfig cfg = parse_model_config(text, "tiny-skip");
+  REQUIRE(cfg.hourglass_skip);
+  CHECK_FALSE(base.hourglass_skip);
+  PoseNet skip(cfg), plain(base);
+  layers::ParamList ps, pp;
+  skip.params(ps);
+  plain.params(pp);
+  REQUIRE(ps.size() == pp.size());
+  for (std::size_t i = 0; i < ps.size(); ++i) CHECK(ps[i].param->shape == pp[i].param->shape);
+  // The same weights give other joints: the skip is in the function.
+  skip.init(3);
+  plain.init(3);
+  skip.set_training(false);
+  plain.set_training(false);
+  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 5);
+  skip.forward(x.act, cfg.window);
+  plain.forward(x.act, cfg.window);
+  double diff = 0;
+  for (std::size_t i = 0; i < skip.joints().size(); ++i) diff += std::abs(skip.joints()[i] - plain.joints()[i]);
+  CHECK(diff > 1e-3);
+  PoseNet net(cfg);
+  CHECK(check_pose_gradients(net, cfg, 2, [](const std::string&, int layer) { return layer % 23 == 0; }) >= 10);
+  // (The skip's backward is checked block by block in tests/test_blocks.cpp.)
+}
+
 TEST_CASE("pose net forward_cropped: features beyond the head's receptive field of the crop edge are the whole frame's", "[networks][pose]") {
   // A wide frame (64 x 512) whose right half is zero, as a masked frame is outside the mask.
   const std::string text =

@@ -127,7 +127,7 @@ double rel_error(const std::vector<float>& ours, const Array& ref) {
 
 }  // namespace
 
-TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, and tiny at head_stride 4", "[parity]") {
+TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, tiny at head_stride 4 and with hourglass_skip", "[parity]") {
   require_torch();
   const auto dir = std::filesystem::temp_directory_path() / ("yelan-parity-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -149,6 +149,14 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, and
     j["pose"]["head_stride"] = 4;
     std::ofstream(dir / "tiny-s4.json") << j.dump(2);
   }
+  // tiny with pose.hourglass_skip: each hourglass's mid resolution added past its bottleneck
+  {
+    std::ifstream in(source_dir() + "/weights_tools/configs/tiny.json");
+    auto j = nlohmann::json::parse(in);
+    j["name"] = "tiny-skip";
+    j["pose"]["hourglass_skip"] = true;
+    std::ofstream(dir / "tiny-skip.json") << j.dump(2);
+  }
   // the default's shapes with stage 1 on the input pooled 2 x 2 (130 x 173 -> 65 x 86 -> 130 x 173)
   {
     std::ifstream in(source_dir() + "/weights_tools/configs/small.json");
@@ -158,7 +166,8 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, and
     std::ofstream(dir / "small-p2.json") << j.dump(2);
   }
   for (const std::string& name : std::vector<std::string>{"tiny", "small", (dir / "paper-w1.json").string(),
-                                                          (dir / "tiny-s4.json").string(), (dir / "small-p2.json").string()}) {
+                                                          (dir / "tiny-s4.json").string(), (dir / "small-p2.json").string(),
+                                                          (dir / "tiny-skip.json").string()}) {
     const std::string stem = std::filesystem::path(name).stem().string();
     const std::string cs = (dir / (stem + ".h5")).string();
     const std::string cmd = "cd '" + source_dir() + "' && /usr/bin/python3 weights_tools/make_parity_case.py --config '" +

@@ -576,6 +576,58 @@ TEST_CASE("run: streaming evaluation counts ticks, follows beta, and the paper p
   CHECK_FALSE(std::isnan(nobody.paper.mpjpe_mm));
 }
 
+TEST_CASE("run: reading the TORE in stage 2's box alone between stage 1's runs changes no pose, and pictures still see the whole TORE", "[run]") {
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  yelan::test::CliTempDir d("run-tore-box");
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "1s", "-o", d / "r.yelan.h5"}).code == 0);
+  struct Tick {
+    bool ran, person;
+    float confidence;
+    std::array<std::array<float, 3>, 13> joints;
+    std::uint64_t tore_hash, input_hash;
+  };
+  auto fnv = [](const float* p, std::size_t n) {
+    std::uint64_t h = 1469598103934665603ull;
+    const auto* b = reinterpret_cast<const unsigned char*>(p);
+    for (std::size_t i = 0; i < n * sizeof(float); ++i) h = (h ^ b[i]) * 1099511628211ull;
+    return h;
+  };
+  auto ticks = [&](bool box, yelan::run::RunStats& st) {
+    yelan::run::RunOptions o;
+    o.tore_box = box;
+    yelan::run::PosePipeline pipe(w, 346, 260, o);
+    std::vector<Tick> out;
+    yelan::run::run_file(pipe, d / "r.yelan.h5", 1000000, [&](const yelan::run::Pose& p) {
+      const auto& in = pipe.last_input();
+      const auto& tore = pipe.last_tore();
+      out.push_back({p.mask_ran, p.person, p.confidence, p.joints_mm, fnv(tore.data(), tore.size()),
+                     fnv(in.data, std::size_t(in.cb()) * in.pixels() * 16)});
+    });
+    st = pipe.stats();
+    return out;
+  };
+  yelan::run::RunStats sb, sw;
+  const auto boxed = ticks(true, sb), whole = ticks(false, sw);
+  REQUIRE(boxed.size() >= 40);
+  REQUIRE(whole.size() == boxed.size());
+  for (std::size_t i = 0; i < boxed.size(); ++i) {
+    INFO("tick " << i);
+    CHECK(boxed[i].ran == whole[i].ran);
+    CHECK(boxed[i].person == whole[i].person);
+    CHECK(boxed[i].confidence == whole[i].confidence);
+    CHECK(boxed[i].input_hash == whole[i].input_hash);
+    CHECK(boxed[i].tore_hash == whole[i].tore_hash);
+    for (int j = 0; j < 13; ++j)
+      for (int k = 0; k < 3; ++k)
+        if (!std::isnan(whole[i].joints[j][k])) CHECK(boxed[i].joints[j][k] == whole[i].joints[j][k]);
+  }
+  // The box was read on the ticks stage 1 skipped, and it was smaller than the frame.
+  CHECK(sw.tore_box_ticks == 0);
+  CHECK(sb.tore_box_ticks + sb.mask_runs + sb.stale == sb.ticks);
+  CHECK(sb.tore_box_ticks >= sb.ticks / 2);
+  CHECK(sb.tore_box_area / double(sb.tore_box_ticks) < 0.6);
+}
+
 TEST_CASE("run: a flood of noise events and an empty stream keep the pipeline running", "[run]") {
   yelan::test::CliTempDir d("run-flood");
   REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <numeric>
 #include <sstream>
 #include <unistd.h>
 
@@ -45,7 +46,7 @@ std::string random_weights(const std::string& config, const std::string& dir) {
 }  // namespace
 
 int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights", "--crop-margin"}, {"--json", "--no-torch"});
+  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights", "--crop-margin"}, {"--json", "--no-torch", "--whole-tore"});
   args.expect_positionals(0, 0);
   const double rate = args.number_or("--rate", 50, 0, 10000, true), seconds = args.number_or("--seconds", 2, 0, 3600, true);
   // Absent: each model's own run.beta (its shipped setting; 0.99, the paper's, without one).
@@ -83,6 +84,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       o.rate_hz = rate;
       o.beta = beta;
       o.crop_margin = crop_margin;
+      o.tore_box = !args.flag("--whole-tore");
       run::PosePipeline pipe(wpath, 346, 260, o);
       std::uint64_t n = 0;
       const auto t0 = std::chrono::steady_clock::now();
@@ -97,7 +99,10 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       for (std::size_t i = 0; i < s.times.stage1_ms.size(); ++i) nets += s.times.stage1_ms[i] + s.times.stage2_ms[i];
       rows.back().nets_ms = nets / double(std::max<std::size_t>(1, s.times.stage1_ms.size()));
       rows.back().crop_share = run::crop_share(s);
-      err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s (beta " << pipe.beta() << ")\n";
+      err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s (beta " << pipe.beta()
+          << "; TORE read in stage 2's box on " << s.tore_box_ticks << " of " << s.ticks << " ticks, "
+          << 100 * s.tore_box_area / double(std::max<std::uint64_t>(1, s.tore_box_ticks)) << "% of the frame; TORE mean "
+          << std::accumulate(s.times.tore_ms.begin(), s.times.tore_ms.end(), 0.0) / double(std::max<std::size_t>(1, s.times.tore_ms.size())) << " ms)\n";
     }
   set_threads(saved);
   // PyTorch after ours, never both thread pools at once.

@@ -133,6 +133,7 @@ dataset_s8() { dataset_arms "$DATA_S8" --remix-arms 0.5; }
 # anywhere in an arm's range on the clip's body (named ...-free; camera/sim/free_arms.h), arm
 # poses no clip has. ds-s7's files stay beside them (hard links). 162 simulated, 951 s at two threads.
 DATA_S9=${DATA_S9:-/var/tmp/yelan-data/ds-s9}
+DATA_STICK=${DATA_STICK:-/var/tmp/yelan-data/stick}
 dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
 dataset() {
@@ -478,6 +479,30 @@ case "$what" in
       "$Y" weights widen --weights "${POSE_S25_FROM:-models/default.h5}" --config "$WIDE_CFG" -o "$RUNS/pose-s25-wide-init.h5"
     CFG=$WIDE_CFG DATA=$DATA_S9 train pose pose-s25-wide "${POSE_S25_STEPS:-1000}" --occlusion --lr 3e-4 \
       --init "$RUNS/pose-s25-wide-init.h5" --mask-weights "${POSE_S25_MASK:-models/default.h5}" --mask-reuse 16 ;;
+  # The stick-figure diagnostic (benchmarks/training/stick_figure.py): the same labels, the
+  # events those of the projected skeleton alone, the masks the whole frame. STICK_VAL: ds-s7's
+  # 56 validation dancers (ds7val-dancers, made by the twentieth session's reproduce block).
+  stick-data)
+    python3 benchmarks/training/stick_figure.py "${STICK_VAL:-/var/tmp/yelan-data/ds7val-dancers}" "$DATA_STICK/val"
+    python3 benchmarks/training/stick_figure.py --dancers-only "$DATA_S9/train" "$DATA_STICK/train" ;;
+  # train-stick-init: stage 2 from the default's; train-stick-scratch: from a random init.
+  train-stick-init)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json DATA=$DATA_STICK/train \
+      train pose stick-init "${STICK_STEPS:-1500}" --val-data "$DATA_STICK/val" --lr 1e-3 --init models/default.h5 ;;
+  train-stick-scratch)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json DATA=$DATA_STICK/train \
+      train pose stick-scratch "${STICK_STEPS:-1500}" --val-data "$DATA_STICK/val" --lr 1e-3 ;;
+  # train-stick-skip: train-stick-init's recipe with pose.hourglass_skip (the hourglasses'
+  # mid resolution added past their bottleneck); the same tensors, the default's to start.
+  train-stick-skip)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-hgskip.json DATA=$DATA_STICK/train \
+      train pose stick-skip "${STICK_STEPS:-1500}" --val-data "$DATA_STICK/val" --lr 1e-3 --init models/default.h5 ;;
+  # pose-s24-free's recipe exactly (1000 steps on ds-s9 behind the default's stage 1 and its
+  # reused masks, lr 3e-4, from pose-s21-reuse), with pose.hourglass_skip.
+  train-pose-s26-skip)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-hgskip.json DATA=$DATA_S9 \
+      train pose pose-s26-skip "${POSE_S26_STEPS:-1000}" --occlusion --lr 3e-4 \
+      --init "${POSE_S26_INIT:-models/campaign/pose-s21-reuse/checkpoint.h5}" --mask-weights models/default.h5 --mask-reuse 16 ;;
   ab-mask)
     "$0" train-pose-s19-netmask &
     "$0" train-pose-s19-truemask &

@@ -32,6 +32,12 @@ struct ToreOptions {
   std::int64_t tau_us = 5'000'000;    // YeLan's horizon: ages >= tau read 0; 2..2^31-1
 };
 
+// A rectangle of pixels, [x0, x1) x [y0, y1).
+struct PixelRect {
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+};
+
 struct BaldwinScale {
   std::int64_t min_t_us = 150;        // ages up to this read 0
   std::int64_t max_t_us = 5'000'000;  // ages clip here; empty slots count as this
@@ -72,6 +78,16 @@ class ToreVolume {
   // threads > 1 splits the rows over that many OpenMP threads (1: the calling thread only).
   void readout(std::int64_t t_us, float* out, int threads = 1) const;
   void readout_baldwin(std::int64_t t_us, float* out, BaldwinScale scale = {}, int threads = 1) const;
+  // readout() of the pixels inside `rect` (clipped to the sensor) alone: the rest of `out`
+  // (volume_size() floats) is left as it was. For a reader that looks only there (stage 2
+  // behind a mask), at the rectangle's share of the cost.
+  void readout(std::int64_t t_us, float* out, PixelRect rect) const;
+  // readout() averaged over d x d cells, written pixel-interleaved: channel c of cell (y, x)
+  // to out[(y * out_width + x) * pixel_stride + c] (pixel_stride >= channels()), for the cells
+  // inside `cells` (clipped to the whole cells of the sensor) alone; nothing else is written.
+  // Bit-identical to readout() and then each cell's values summed (rows, then columns, in
+  // order) and scaled by 1 / d^2, without the full-size volume in between.
+  void readout_mean(std::int64_t t_us, int d, float* out, int out_width, int pixel_stride, PixelRect cells) const;
 
   // Raw timestamp of slot k (0 = newest) of a pixel; polarity 1 = ON. kEmpty if none.
   std::int64_t slot(int x, int y, int polarity, int k) const {

@@ -105,7 +105,9 @@ struct PosePipeline::Impl {
   weights::LoadedNetworks nets;
   RunOptions opt;
   camera::ToreVolume tore;
-  std::vector<float> vol;
+  std::vector<float> vol;  // the TORE at vol_t at the sensor's size, read for pictures alone
+  std::int64_t vol_t = 0;
+  bool vol_whole = true;
   layers::ActBuf frame, unmasked, window;
   layers::Act last_in{};
   train::Intrinsics k;
@@ -259,6 +261,26 @@ struct PosePipeline::Impl {
     return reads_reused(use) ? reused_boxes[std::size_t(use)] : boxes[std::size_t(use)];
   }
 
+  // The TORE read out at T and downscaled into `unmasked`: only inside `box` (input pixels)
+  // where given, the rest left stale (the mask that box bounds zeroes it). The whole volume
+  // at the sensor's size is read for pictures alone, on demand (full_tore()).
+  void read_tore(std::int64_t T, const PoseNet::CropBox* box) {
+    vol_t = T;
+    vol_whole = false;
+    const int d = nets.cfg.downscale;
+    if (box) {
+      input::tore_input(tore, T, d, unmasked.act, 0, camera::PixelRect{box->x0, box->y0, box->x1, box->y1});
+      ++stats.tore_box_ticks;
+      stats.tore_box_area += box->empty() ? 0.0 : double(box->x1 - box->x0) * (box->y1 - box->y0) / unmasked.act.pixels();
+      return;
+    }
+    input::tore_input(tore, T, d, unmasked.act, 0, camera::PixelRect{0, 0, unmasked.act.w, unmasked.act.h});
+  }
+  const std::vector<float>& full_tore() {
+    if (!vol_whole) tore.readout(vol_t, vol.data()), vol_whole = true;
+    return vol;
+  }
+
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
     if (b.empty()) return b;
     return {b.x0 - crop, b.y0 - crop, b.x1 + crop, b.y1 + crop};
@@ -297,12 +319,7 @@ struct PosePipeline::Impl {
     }
     events_since = 0;
     layers::NoGrad no_grad;
-    auto t0 = Clock::now();
-    tore.readout(T, vol.data());
-    input::downscale_tore(vol, tore.height(), tore.width(), cfg.downscale, unmasked.act, 0);
-    stats.times.tore_ms.push_back(ms_since(t0));
     // Stage 1, early exit: reuse the stored future mask while its score stays >= beta.
-    t0 = Clock::now();
     const int idx = have_masks ? int(std::llround(double(T - mask_t) * kTrainFrameHz * 1e-6)) : -1;
     // A stored future mask that says nobody is there is not reused, however sure its score:
     // a net that saw an empty room is confidently wrong about the next 300 ms once someone
@@ -321,6 +338,12 @@ struct PosePipeline::Impl {
       }
     }
     int use = hold_current ? 0 : idx;
+    auto t0 = Clock::now();
+    // Stage 2 alone reads this tick's TORE, behind a stored mask: only the mask's box.
+    const bool box_only = !run_mask && opt.tore_box && cfg.runs_stage1() && cfg.masked_input && !cfg.bidirectional;
+    read_tore(T, box_only ? &stage2_box(use) : nullptr);
+    stats.times.tore_ms.push_back(ms_since(t0));
+    t0 = Clock::now();
     if (run_mask) {
       nets.mask.forward(unmasked.act);
       const layers::Act& m = nets.mask.masks();
@@ -489,7 +512,7 @@ double DepthSmoother::update(double depth_mm, std::int64_t t_us) {
   exp_average(x_, have_, t_, std::log(depth_mm), t_us, tau_us_);
   return std::exp(x_);
 }
-const std::vector<float>& PosePipeline::last_tore() const { return impl_->vol; }
+const std::vector<float>& PosePipeline::last_tore() const { return impl_->full_tore(); }
 const std::vector<float>& PosePipeline::last_mask() const {
   static const std::vector<float> none;
   return impl_->masks.empty() ? none : impl_->stage2_mask(std::max(0, impl_->in_use));

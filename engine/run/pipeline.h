@@ -47,6 +47,9 @@ struct RunOptions {
   std::optional<bool> depth_forearms;
   // Seconds between stage 1's runs while it sees nobody, instead of the model's run.idle_recheck_s.
   std::optional<double> idle_recheck_s;
+  // On ticks where stage 2 alone reads the TORE behind a stored mask, read it out only in the
+  // mask's box (the poses are the same; false: the whole sensor every tick, for comparison).
+  bool tore_box = true;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
@@ -81,6 +84,8 @@ struct RunStats {
   std::uint64_t gap_ticks = 0;  // skipped over gaps of more than 2 s without events
   double crop_area = 0;         // sum over stage-2 runs of the head's share of the frame
   std::uint64_t crop_runs = 0;  // stage-2 runs with cropping on
+  double tore_box_area = 0;     // sum over those ticks of the box's share of the frame
+  std::uint64_t tore_box_ticks = 0;  // ticks that read the TORE in stage 2's box alone
   std::vector<double> stage1_run_ms;  // stage 1's time on each tick that ran it
   StageTimes times;
 };

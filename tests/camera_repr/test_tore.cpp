@@ -11,6 +11,7 @@
 
 using yelan::camera::BaldwinScale;
 using yelan::camera::Event;
+using yelan::camera::PixelRect;
 using yelan::camera::ToreOptions;
 using yelan::camera::ToreVolume;
 
@@ -102,6 +103,77 @@ TEST_CASE("TORE read-out: ages at or past tau, and events newer than T, read 0",
   // age 0 (an event exactly at T) reads 1
   CHECK(read(tore, 6000)[0] == 1.f);
   CHECK(read(tore, 6000)[1] == 0.f);  // age 1000 == tau
+}
+
+TEST_CASE("TORE read-out of a rectangle equals the whole read-out there and leaves the rest", "[tore]") {
+  ToreVolume tore(37, 23, ToreOptions{3, 5'000'000});
+  std::mt19937 rng(11);
+  for (int i = 0; i < 4000; ++i)
+    tore.update(Event{std::int64_t(i) * 97, std::uint16_t(rng() % 37), std::uint16_t(rng() % 23), std::uint8_t(rng() % 2)});
+  const std::int64_t T = 4000 * 97;
+  const auto full = read(tore, T);
+  for (PixelRect r : {PixelRect{5, 3, 29, 17}, PixelRect{-4, -2, 9, 40}, PixelRect{30, 0, 99, 1}, PixelRect{0, 0, 37, 23},
+                      PixelRect{12, 12, 12, 20}}) {
+    std::vector<float> v(tore.volume_size(), -7.f);
+    tore.readout(T, v.data(), r);
+    int inside = 0, nonzero = 0;
+    for (int c = 0; c < tore.channels(); ++c)
+      for (int y = 0; y < 23; ++y)
+        for (int x = 0; x < 37; ++x) {
+          const std::size_t i = (std::size_t(c) * 23 + y) * 37 + x;
+          const bool in = x >= r.x0 && x < r.x1 && y >= r.y0 && y < r.y1;
+          inside += in;
+          nonzero += in && v[i] != 0.f;
+          if (in) REQUIRE(v[i] == full[i]);
+          else REQUIRE(v[i] == -7.f);
+        }
+    CHECK(inside == tore.channels() * std::max(0, std::min(r.x1, 37) - std::max(r.x0, 0)) *
+                        std::max(0, std::min(r.y1, 23) - std::max(r.y0, 0)));
+    if (inside > 100) CHECK(nonzero > 0);
+  }
+}
+
+TEST_CASE("TORE read-out averaged over cells equals the read-out then each cell's mean, bit for bit, on every ISA", "[tore]") {
+  yelan::test::IsaGuard guard;
+  std::mt19937 rng(5);
+  for (int k : {1, 3}) {
+    ToreVolume tore(41, 25, ToreOptions{k, 200'000});
+    for (int i = 0; i < 6000; ++i)
+      tore.update(Event{std::int64_t(i) * 53, std::uint16_t(rng() % 41), std::uint16_t(rng() % 25), std::uint8_t(rng() % 2)});
+    const std::int64_t T = 6000 * 53;
+    const int C = tore.channels();
+    for (auto isa : yelan::test::supported_isas()) {
+      yelan::kernels::set_isa(isa);
+      const auto full = read(tore, T);
+      for (int d : {1, 2, 3}) {
+        const int W = 41 / d, H = 25 / d, stride = 16;
+        for (PixelRect r : {PixelRect{0, 0, W, H}, PixelRect{2, 1, W - 3, H - 2}, PixelRect{-5, -5, 3, 99}, PixelRect{4, 4, 4, 9}}) {
+          INFO(yelan::kernels::isa_name(isa) << " k " << k << " d " << d << " rect " << r.x0 << "," << r.y0 << "," << r.x1 << "," << r.y1);
+          std::vector<float> got(std::size_t(W) * H * stride, -3.f);
+          tore.readout_mean(T, d, got.data(), W, stride, r);
+          int written = 0;
+          for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x)
+              for (int c = 0; c < stride; ++c) {
+                const float v = got[(std::size_t(y) * W + x) * stride + c];
+                const bool in = c < C && x >= std::max(r.x0, 0) && x < r.x1 && y >= std::max(r.y0, 0) && y < r.y1;
+                if (!in) {
+                  REQUIRE(v == -3.f);
+                  continue;
+                }
+                float sum = 0;
+                for (int dy = 0; dy < d; ++dy)
+                  for (int dx = 0; dx < d; ++dx) sum += at(full, tore, c, y * d + dy, x * d + dx);
+                REQUIRE(v == sum * (1.f / float(d * d)));
+                written += v != 0.f;
+              }
+          if (r.x0 == 0 && r.y0 == 0) CHECK(written > 0);
+        }
+      }
+    }
+  }
+  std::vector<float> out(64);
+  CHECK_THROWS_AS(ToreVolume(4, 4).readout_mean(0, 2, out.data(), 2, 5, PixelRect{0, 0, 2, 2}), std::invalid_argument);
 }
 
 TEST_CASE("TORE Baldwin read-out follows the original log scaling", "[tore]") {

@@ -33,6 +33,10 @@ const Case kCases[] = {
     {1, 1, 17, 23, 17, 7, 2, 3},  {1, 64, 7, 5, 64, 1, 1, 0},   {1, 33, 9, 7, 31, 1, 2, 0},
     {1, 64, 33, 44, 64, 3, 1, 1}, {1, 3, 1, 1, 5, 3, 1, 1},     {1, 5, 3, 3, 7, 3, 2, 1},
     {2, 20, 12, 11, 40, 3, 2, 1}, {1, 64, 65, 87, 64, 3, 1, 1},
+    // at most 8 channels in the last output block (the half tiles): the pose net's hourglass
+    // layers (8 of 16), a tail of 19 columns, 24 (8 in the second block), a one-block 1x1
+    {1, 8, 17, 22, 8, 3, 1, 1},   {2, 5, 6, 19, 8, 3, 1, 1},    {1, 16, 9, 11, 24, 3, 2, 1},
+    {1, 9, 5, 13, 4, 1, 1, 0},
 };
 
 struct Run {

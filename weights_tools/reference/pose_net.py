@@ -70,8 +70,9 @@ class WindowConvLSTM(nn.Module):
 
 
 class HourglassStage(nn.Module):
-    def __init__(self, cin, joints, lo, hi, mid_hw):
+    def __init__(self, cin, joints, lo, hi, mid_hw, skip=False):
         super().__init__()
+        self.skip = skip  # pose.hourglass_skip: up block's output + the second down block's
         # Output padding so that 2x up-sampling restores the mid size exactly.
         op = (int(mid_hw[0] % 2 == 0), int(mid_hw[1] % 2 == 0))
         self.down_layers = nn.Sequential(
@@ -82,7 +83,12 @@ class HourglassStage(nn.Module):
             regular_block(lo, lo), regular_block(lo, joints))
 
     def forward(self, x):
-        return self.up_layers(self.down_layers(x))
+        if not self.skip:
+            return self.up_layers(self.down_layers(x))
+        early = self.down_layers[1](self.down_layers[0](x))
+        y = self.up_layers[2](self.up_layers[1](self.up_layers[0](self.down_layers[4](self.down_layers[3](
+            self.down_layers[2](early))))))
+        return self.up_layers[4](self.up_layers[3](y + early))
 
 
 class HeatmapCombiner(nn.Module):
@@ -118,7 +124,7 @@ class PoseNet(nn.Module):
             if t > 0:
                 self.hm_combiners.append(HeatmapCombiner(cfg.joints, mid))
             for plane in (self.xy_hm_cnns, self.zy_hm_cnns, self.xz_hm_cnns):
-                plane.append(HourglassStage(mid, cfg.joints, lo, hi, self.mid_hw))
+                plane.append(HourglassStage(mid, cfg.joints, lo, hi, self.mid_hw, cfg.hourglass_skip))
 
     def forward(self, x):
         """x (S, C, H, W) or (B, S, C, H, W): one or B windows.
