@@ -7,6 +7,18 @@
 
 namespace yelan::input {
 
+namespace {
+
+// A TORE of `channels` planes at sensor_w x sensor_h fills input `a` at downscale d, or throws.
+void require_fills(int channels, int sensor_w, int sensor_h, const layers::Act& a, int d) {
+  if (channels != a.c || std::size_t(a.h) * d > std::size_t(sensor_h) || std::size_t(a.w) * d > std::size_t(sensor_w))
+    throw std::invalid_argument("TORE of " + std::to_string(channels) + " channels at " + std::to_string(sensor_w) + "x" +
+                                std::to_string(sensor_h) + " does not fill an input of " + std::to_string(a.c) + "x" +
+                                std::to_string(a.w) + "x" + std::to_string(a.h) + " at downscale " + std::to_string(d));
+}
+
+}  // namespace
+
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
   downscale_tore(vol, sensor_h, sensor_w, d, a, n, camera::PixelRect{0, 0, a.w, a.h});
 }
@@ -14,10 +26,10 @@ void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, i
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n,
                     camera::PixelRect r) {
   const int C = a.c, H = a.h, W = a.w;
-  if (vol.size() != std::size_t(C) * sensor_h * sensor_w || std::size_t(H) * d > std::size_t(sensor_h) ||
-      std::size_t(W) * d > std::size_t(sensor_w))
-    throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values does not fill " +
-                                std::to_string(C) + " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
+  if (vol.size() != std::size_t(C) * sensor_h * sensor_w)
+    throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values is not " + std::to_string(C) +
+                                " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
+  require_fills(C, sensor_w, sensor_h, a, d);
   r = {std::max(r.x0, 0), std::max(r.y0, 0), std::min(r.x1, W), std::min(r.y1, H)};
   if (r.empty()) return;
   const float inv = 1.f / float(d * d);
@@ -48,11 +60,7 @@ void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, i
 
 void tore_input(const camera::ToreVolume& tore, std::int64_t t, int d, const layers::Act& a, int n,
                 camera::PixelRect r) {
-  if (a.c != tore.channels() || std::size_t(a.h) * d > std::size_t(tore.height()) ||
-      std::size_t(a.w) * d > std::size_t(tore.width()))
-    throw std::invalid_argument("TORE of " + std::to_string(tore.channels()) + " channels at " + std::to_string(tore.width()) +
-                                "x" + std::to_string(tore.height()) + " does not fill an input of " + std::to_string(a.c) +
-                                "x" + std::to_string(a.w) + "x" + std::to_string(a.h) + " at downscale " + std::to_string(d));
+  require_fills(tore.channels(), tore.width(), tore.height(), a, d);
   r = {std::max(r.x0, 0), std::max(r.y0, 0), std::min(r.x1, a.w), std::min(r.y1, a.h)};
   if (a.c > 16) {  // more than one channel block: not pixel-interleaved, go through the volume
     std::vector<float> vol(tore.volume_size());

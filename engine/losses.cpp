@@ -54,11 +54,48 @@ double js_map(const Act& p, int n, int lane, const float* q, double scale, const
 
 }  // namespace
 
-HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const float* valid,
-                 std::vector<std::array<Act, 3>>& dheat, std::vector<layers::Floats>& store) {
+int mirror_joint(int j) { return j == 0 ? 0 : j % 2 ? j + 1 : j - 1; }
+
+HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target_in, const float* valid_in,
+                 std::vector<std::array<Act, 3>>& dheat, std::vector<layers::Floats>& store, int swap_group) {
   HpeLoss out;
   const Act& ref = net.heatmap(0, 0);
   const int n = ref.n, J = ref.c, h = ref.h, w = ref.w;
+  const float *target = target_in, *valid = valid_in;
+  std::vector<float> swapped_target, swapped_valid;
+  if (swap_group > 0) {
+    if (J != 13) throw std::invalid_argument("hpe loss: trading left and right needs SPEC's 13 joints, not " + std::to_string(J));
+    std::vector<float> last(std::size_t(n) * J * 3);
+    layers::dsnt_joints_forward(net.heatmap(stages - 1, 0), net.heatmap(stages - 1, 1), net.heatmap(stages - 1, 2), last.data());
+    swapped_target.assign(target_in, target_in + std::size_t(n) * J * 3);
+    swapped_valid.assign(valid_in, valid_in + std::size_t(n) * J);
+    auto dist = [&](std::size_t k_pred, std::size_t k_tgt) {
+      double s = 0;
+      for (int c = 0; c < 3; ++c) s += double(last[k_pred * 3 + c] - target_in[k_tgt * 3 + c]) * (last[k_pred * 3 + c] - target_in[k_tgt * 3 + c]);
+      return std::sqrt(s);
+    };
+    for (int g0 = 0; g0 < n; g0 += swap_group) {
+      const int g1 = std::min(n, g0 + swap_group);
+      double as_is = 0, traded = 0;
+      for (int i = g0; i < g1; ++i)
+        for (int j = 0; j < J; ++j) {
+          const std::size_t k = std::size_t(i) * J + j, m = std::size_t(i) * J + mirror_joint(j);
+          if (valid_in[k] != 0.f) as_is += dist(k, k);
+          if (valid_in[m] != 0.f) traded += dist(k, m);
+        }
+      ++out.groups;
+      if (!(traded < as_is)) continue;
+      ++out.swapped;
+      for (int i = g0; i < g1; ++i)
+        for (int j = 0; j < J; ++j) {
+          const std::size_t k = std::size_t(i) * J + j, m = std::size_t(i) * J + mirror_joint(j);
+          for (int c = 0; c < 3; ++c) swapped_target[k * 3 + c] = target_in[m * 3 + c];
+          swapped_valid[k] = valid_in[m];
+        }
+    }
+    target = swapped_target.data();
+    valid = swapped_valid.data();
+  }
   double count = 0;
   for (int i = 0; i < n * J; ++i) count += valid[i];
   const double denom = std::max(count, 1.0) * stages;  // masked mean, then the stage mean

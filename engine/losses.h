@@ -23,12 +23,21 @@ struct HpeLoss {
   double total = 0;
   std::vector<double> per_stage;  // L_t
   std::vector<double> euclid;     // the distance part of each stage
+  int groups = 0, swapped = 0;    // swap_group > 0: groups scored, and of them against the swapped target
 };
 
 // Computes the loss of the net's last forward and fills dheat (one entry per stage:
 // xy, zy, xz gradient maps, storage in `store`). target: n x J x 3, valid: n x J (0/1).
+// swap_group > 0 (not the paper's; the 13 joints of SPEC only): the frames in groups of
+// that many (a window), each group scored against its target or the target with left and
+// right traded, whichever the last stage's joints are nearer to (summed distance): a net
+// that cannot tell a dancer's back from the front may commit to either labelling instead of
+// hedging between the hands, so whether it can place the limbs at all is seen apart.
 HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const float* valid,
-                 std::vector<std::array<layers::Act, 3>>& dheat, std::vector<layers::Floats>& store);
+                 std::vector<std::array<layers::Act, 3>>& dheat, std::vector<layers::Floats>& store, int swap_group = 0);
+
+// The SPEC joint that trades places with joint j when left and right are swapped.
+int mirror_joint(int j);
 
 struct MaskLoss {
   double total = 0, bce_first = 0, bce_all = 0, score_mse = 0;

@@ -44,11 +44,13 @@ inline double dot(const layers::Act& a, const layers::Act& b) {
 // Checks grad[i] = dL/dv[i] for every `stride`-th entry of v. Samples whose quotient
 // changes between steps h and h/2 crossed a kink and are skipped; at least `min_fraction`
 // must count (a BN shift moves a whole channel, so its samples cross kinks most often).
+// min_agree < 1: that share of the checked samples must agree, not each (through many ReLU
+// layers a kink within a step slips past the two-step test on a few samples).
 // Returns how many samples were checked.
 inline int check_fd_kinked(const std::function<double()>& loss, float* v, const float* grad,
                             const std::vector<std::size_t>& indices, double h, double tol, const char* what,
-                            double min_fraction = 0.5) {
-  int checked = 0, skipped = 0;
+                            double min_fraction = 0.5, double min_agree = 1) {
+  int checked = 0, skipped = 0, agreed = 0;
   for (std::size_t i : indices) {
     const float saved = v[i];
     auto quotient = [&](double step) {
@@ -65,12 +67,17 @@ inline int check_fd_kinked(const std::function<double()>& loss, float* v, const 
       continue;
     }
     ++checked;
-    INFO(what << "[" << i << "] analytic " << grad[i] << " numeric " << f1);
-    REQUIRE(std::abs(grad[i] - f1) <= tol * (1 + std::abs(f1)));
+    const bool ok = std::abs(grad[i] - f1) <= tol * (1 + std::abs(f1));
+    agreed += ok;
+    if (min_agree >= 1) {
+      INFO(what << "[" << i << "] analytic " << grad[i] << " numeric " << f1);
+      REQUIRE(ok);
+    }
   }
-  INFO(what << ": " << checked << " checked, " << skipped << " skipped at kinks");
+  INFO(what << ": " << checked << " checked, " << skipped << " skipped at kinks, " << agreed << " agree");
   REQUIRE(checked >= min_fraction * (checked + skipped));
   if (min_fraction > 0) REQUIRE(checked > 0);
+  REQUIRE(agreed >= min_agree * checked);
   return checked;
 }
 

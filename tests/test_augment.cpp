@@ -253,3 +253,41 @@ TEST_CASE("augment: a mirrored batch is the plain one mirrored, labels and joint
     }
   }
 }
+
+TEST_CASE("augment: the framing similarity centres the window's joint box and fills the frame with it", "[train]") {
+  namespace sim = yelan::camera::sim;
+  sim::SimWindow w;  // the default camera: fx = fy = 485, centre (173, 130), 346 x 260
+  w.frames.resize(4);
+  const double z = 4850;  // u = x / 10 + 173, v = y / 10 + 130
+  auto put = [&](int f, int j, double u, double v, bool valid) {
+    w.frames[std::size_t(f)].joints_mm[std::size_t(j)] = {(u - 173) * 10, (v - 130) * 10, z};
+    w.frames[std::size_t(f)].valid[std::size_t(j)] = valid;
+  };
+  put(1, 0, 100, 80, true);
+  put(2, 5, 140, 160, true);
+  put(2, 6, 300, 10, false);  // not valid: ignored
+  put(0, 3, 340, 250, true);  // before the frames asked about: ignored
+  put(3, 3, 5, 5, true);      // after them: ignored
+  const Similarity s = framing_similarity(w, 1, 2, 0.1, 4);
+  // box 40 x 80 px, grown to 48 x 96: the height binds, 260 / 96
+  CHECK(s.scale == Approx(260.0 / 96));
+  CHECK(s.angle_rad == 0);
+  const auto lo = warp_point(s, 100, 80, 346, 260), hi = warp_point(s, 140, 160, 346, 260);
+  CHECK((lo[0] + hi[0]) / 2 == Approx(173));
+  CHECK((lo[1] + hi[1]) / 2 == Approx(130));
+  CHECK(hi[1] - lo[1] == Approx(260 / 1.2));
+  // a tiny dancer is zoomed at most `most`; one bigger than the frame only centred
+  put(1, 0, 150, 120, true);
+  put(2, 5, 152, 124, true);
+  CHECK(framing_similarity(w, 1, 2, 0.1, 4).scale == 4);
+  put(1, 0, -50, 20, true);
+  put(2, 5, 300, 290, true);
+  const Similarity big = framing_similarity(w, 1, 2, 0.1, 4);
+  CHECK(big.scale == 1);
+  CHECK(warp_point(big, 125, 155, 346, 260)[0] == Approx(173));
+  CHECK(warp_point(big, 125, 155, 346, 260)[1] == Approx(130));
+  // nobody: the identity
+  for (auto& f : w.frames) f.valid.fill(0);
+  const Similarity none = framing_similarity(w, 0, 4);
+  CHECK((none.scale == 1 && none.shift_x == 0 && none.shift_y == 0));
+}

@@ -111,25 +111,7 @@ TEST_CASE("hourglass stage, plain and with the skip past its bottleneck: gradien
     // does not catch: each tensor passes when 3 in 4 of its smooth samples agree (a gradient
     // missing the skip's share misses on most of the blocks before it).
     auto agree = [&](float* v, const float* g, const std::vector<std::size_t>& idx, const std::string& what) {
-      int smooth = 0, ok = 0;
-      for (std::size_t i : idx) {
-        const float saved = v[i];
-        auto q = [&](double h) {
-          v[i] = saved + float(h);
-          const double lp = loss();
-          v[i] = saved - float(h);
-          const double lm = loss();
-          v[i] = saved;
-          return (lp - lm) / (2 * h);
-        };
-        const double f1 = q(1e-3), f2 = q(5e-4);
-        if (std::abs(f1 - f2) > 1e-3 * (1 + std::abs(f1))) continue;
-        ++smooth;
-        ok += std::abs(g[i] - f1) <= 5e-3 * (1 + std::abs(f1));
-      }
-      INFO(what << ": " << ok << " of " << smooth << " smooth samples agree");
-      CHECK(smooth >= 1);
-      CHECK(ok >= 0.75 * smooth);
+      check_fd_kinked(loss, v, g, idx, 1e-3, 5e-3, what.c_str(), 1e-9, 0.75);
     };
     agree(x.mem.data(), dx.mem.data(), sample_real(x, 7), "dx");
     int convs = 0;

@@ -187,3 +187,45 @@ TEST_CASE("mask loss: the Dice term scores the current mask's overlap, its gradi
     CHECK(worst < 1e-4 * scale);
   }
 }
+
+TEST_CASE("pose loss: --swap-loss scores each window against its joints or the mirror labelling, whichever is nearer",
+          "[train][losses]") {
+  const ModelConfig cfg = load_model_config("tiny");
+  PoseNet net(cfg);
+  net.init(5);
+  net.set_training(false);
+  const int S = cfg.window, n = 2 * S, J = cfg.joints;
+  test::Owned x(n, cfg.channels, cfg.height(), cfg.width(), 31);
+  net.forward(x.act, S);
+  // The net's own joints as one labelling; traded left for right, the other (farther from
+  // them wherever the net's left and right joints differ at all).
+  std::vector<float> own(net.joints().begin(), net.joints().end()), traded(own.size()), valid(std::size_t(n) * J, 1.f);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < J; ++j)
+      for (int c = 0; c < 3; ++c)
+        traded[(std::size_t(i) * J + j) * 3 + c] = own[(std::size_t(i) * J + mirror_joint(j)) * 3 + c];
+  // the second window's labels traded: it is scored against the other labelling
+  std::vector<float> mixed(own);
+  std::copy(traded.begin() + std::ptrdiff_t(S) * J * 3, traded.end(), mixed.begin() + std::ptrdiff_t(S) * J * 3);
+  valid[5 * J + 8] = 0.f;  // a joint out of sight trades its validity with its mirror
+  std::vector<float> mixed_valid(valid);
+  for (int i = S; i < n; ++i)
+    for (int j = 0; j < J; ++j) mixed_valid[std::size_t(i) * J + j] = valid[std::size_t(i) * J + mirror_joint(j)];
+  std::vector<std::array<layers::Act, 3>> d_plain, d_swap;
+  std::vector<layers::Floats> s_plain, s_swap;
+  const HpeLoss plain = hpe_loss(net, cfg.stages, own.data(), mixed_valid.data(), d_plain, s_plain);
+  const HpeLoss swap = hpe_loss(net, cfg.stages, mixed.data(), valid.data(), d_swap, s_swap, S);
+  CHECK(swap.groups == 2);
+  CHECK(swap.swapped == 1);
+  CHECK(swap.total == Approx(plain.total).epsilon(1e-12));
+  for (int t = 0; t < cfg.stages; ++t)
+    for (int p = 0; p < 3; ++p)
+      for (std::size_t i = 0; i < d_plain[t][p].floats(); ++i) REQUIRE(d_swap[t][p].data[i] == d_plain[t][p].data[i]);
+  // without the option the traded window costs more; the mirror of a mirror is the joint
+  const HpeLoss strict = hpe_loss(net, cfg.stages, mixed.data(), valid.data(), d_swap, s_swap);
+  CHECK(strict.groups == 0);
+  CHECK(strict.total > plain.total);
+  for (int j = 0; j < J; ++j) CHECK(mirror_joint(mirror_joint(j)) == j);
+  CHECK(mirror_joint(0) == 0);
+  CHECK(mirror_joint(7) == 8);  // handR <-> handL
+}

@@ -134,6 +134,10 @@ dataset_s8() { dataset_arms "$DATA_S8" --remix-arms 0.5; }
 # poses no clip has. ds-s7's files stay beside them (hard links). 162 simulated, 951 s at two threads.
 DATA_S9=${DATA_S9:-/var/tmp/yelan-data/ds-s9}
 DATA_STICK=${DATA_STICK:-/var/tmp/yelan-data/stick}
+DATA_SK_SRC=${DATA_SK_SRC:-/var/tmp/yelan-data/sk-src}
+DATA_SK=${DATA_SK:-/var/tmp/yelan-data/sk}
+DATA_SKS=${DATA_SKS:-/var/tmp/yelan-data/sks}
+STICK_CFG0=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json
 dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
 dataset() {
@@ -483,8 +487,8 @@ case "$what" in
   # events those of the projected skeleton alone, the masks the whole frame. STICK_VAL: ds-s7's
   # 56 validation dancers (ds7val-dancers, made by the twentieth session's reproduce block).
   stick-data)
-    python3 benchmarks/training/stick_figure.py "${STICK_VAL:-/var/tmp/yelan-data/ds7val-dancers}" "$DATA_STICK/val"
-    python3 benchmarks/training/stick_figure.py --dancers-only "$DATA_S9/train" "$DATA_STICK/train" ;;
+    /usr/bin/python3 benchmarks/training/stick_figure.py "${STICK_VAL:-/var/tmp/yelan-data/ds7val-dancers}" "$DATA_STICK/val"
+    /usr/bin/python3 benchmarks/training/stick_figure.py --dancers-only "$DATA_S9/train" "$DATA_STICK/train" ;;
   # train-stick-init: stage 2 from the default's; train-stick-scratch: from a random init.
   train-stick-init)
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json DATA=$DATA_STICK/train \
@@ -497,6 +501,35 @@ case "$what" in
   train-stick-skip)
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-hgskip.json DATA=$DATA_STICK/train \
       train pose stick-skip "${STICK_STEPS:-1500}" --val-data "$DATA_STICK/val" --lr 1e-3 --init models/default.h5 ;;
+  # The stick diagnostic made from nothing (2026-12-01, twenty-seventh session, a new machine):
+  # sk-src holds 160 training dancers (half with free arms) and ds-s7's 56 validation dancers
+  # (17 min on two cores), drawn as stick figures in sk.
+  stick-data-s27)
+    "$Y" sim --dataset "$DATA_SK_SRC" --seed 1 --train 160 --val 32 --test 0 --train-empty 0 --val-empty 0 --duration 5s \
+      --random-looks --frame-dancer --train-rooms 0 --val-rooms 0 --train-dancer-rooms 0 --val-dancer-rooms 24 \
+      --free-arms 0.5 --threads "${THREADS:-2}"
+    for split in train val; do
+      /usr/bin/python3 benchmarks/training/stick_figure.py "$DATA_SK_SRC/$split" "$DATA_SK/$split"
+    done ;;
+  # sk-base: the default's stage 2 from a random init on sk (STICK_CFG: another config,
+  # SK_NAME the run's name); sk-frame: the same with every window zoomed onto its dancer
+  # (--frame-zoom: the oracle crop), training and validation.
+  train-sk-base)
+    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SK/train train pose "${SK_NAME:-sk-base}" "${STICK_STEPS:-1500}" \
+      --val-data "$DATA_SK/val" --lr 1e-3 ;;
+  train-sk-frame)
+    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SK/train train pose "${SK_NAME:-sk-frame}" "${STICK_STEPS:-1500}" \
+      --val-data "$DATA_SK/val" --lr 1e-3 --frame-zoom ;;
+  # Sided sticks (stick_figure.py --sided: the right side's bones ON events, the left's OFF):
+  # a plain stick figure from the back is the front's mirror image, so a net can only hedge
+  # between the hands; sk-sided asks whether telling the sides apart is what holds it.
+  stick-data-sided)
+    for split in val train; do
+      /usr/bin/python3 benchmarks/training/stick_figure.py --sided "$DATA_SK_SRC/$split" "$DATA_SKS/$split"
+    done ;;
+  train-sk-sided)
+    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SKS/train train pose "${SK_NAME:-sk-sided}" "${STICK_STEPS:-1500}" \
+      --val-data "$DATA_SKS/val" --lr 1e-3 ;;
   # pose-s24-free's recipe exactly (1000 steps on ds-s9 behind the default's stage 1 and its
   # reused masks, lr 3e-4, from pose-s21-reuse), with pose.hourglass_skip.
   train-pose-s26-skip)

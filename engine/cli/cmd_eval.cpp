@@ -104,7 +104,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
                 "--low-light-dn", "--poses", "--depth-tau", "--mask-pictures"},
-               {"--true-mask", "--no-floors", "--run", "--unframed"});
+               {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
@@ -136,6 +136,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   spec.seed = std::uint64_t(a.int_value_or("--seed", 1, 0, 1 << 30));
   spec.seconds_per_scene = a.number_or("--seconds", 1, 0, 3600, true);
   spec.true_mask = a.flag("--true-mask");
+  spec.frame_zoom = a.flag("--frame-zoom");
   spec.floors = !a.flag("--no-floors");
   spec.framed = !a.flag("--unframed");
   spec.history_s = a.number_or("--history", 5, 0, 60);

@@ -55,7 +55,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight",
                 "--windows-per-visit", "--mask-reuse"},
-               {"--occlusion", "--warp", "--flip", "--resume", "--quiet"});
+               {"--occlusion", "--warp", "--flip", "--frame-zoom", "--swap-loss", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
   const auto data = a.value("--data");
@@ -137,6 +137,10 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.occlusion = a.flag("--occlusion");
   spec.warp = a.flag("--warp");
   spec.flip = a.flag("--flip");
+  spec.frame_zoom = a.flag("--frame-zoom");
+  spec.swap_loss = a.flag("--swap-loss");
+  if (spec.swap_loss && spec.stage != "pose") throw UsageError("--swap-loss: for --stage pose only");
+  if (spec.frame_zoom && (spec.warp || spec.stage != "pose")) throw UsageError("--frame-zoom: for --stage pose, without --warp");
   spec.empty_weight = float(a.number_or("--empty-weight", 1, 0, 1e3, true));
   if (spec.empty_weight != 1 && spec.stage != "mask") throw UsageError("--empty-weight: for --stage mask only");
   spec.dice_weight = float(a.number_or("--dice-weight", 0, 0, 100));

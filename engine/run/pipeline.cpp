@@ -271,7 +271,7 @@ struct PosePipeline::Impl {
     if (box) {
       input::tore_input(tore, T, d, unmasked.act, 0, camera::PixelRect{box->x0, box->y0, box->x1, box->y1});
       ++stats.tore_box_ticks;
-      stats.tore_box_area += box->empty() ? 0.0 : double(box->x1 - box->x0) * (box->y1 - box->y0) / unmasked.act.pixels();
+      stats.tore_box_area += frame_share(*box, unmasked.act);
       return;
     }
     input::tore_input(tore, T, d, unmasked.act, 0, camera::PixelRect{0, 0, unmasked.act.w, unmasked.act.h});
@@ -279,6 +279,12 @@ struct PosePipeline::Impl {
   const std::vector<float>& full_tore() {
     if (!vol_whole) tore.readout(vol_t, vol.data()), vol_whole = true;
     return vol;
+  }
+
+  // The share of x's frame that b covers, clipped to the frame.
+  static double frame_share(const PoseNet::CropBox& b, const layers::Act& x) {
+    const int w = std::min(b.x1, x.w) - std::max(b.x0, 0), h = std::min(b.y1, x.h) - std::max(b.y0, 0);
+    return w > 0 && h > 0 ? double(w) * h / (double(x.w) * x.h) : 0.0;
   }
 
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
@@ -298,7 +304,7 @@ struct PosePipeline::Impl {
       return;
     }
     const PoseNet::CropBox ran = nets.pose.forward_cropped(x, box, frames);
-    stats.crop_area += double(ran.x1 - ran.x0) * (ran.y1 - ran.y0) / (double(x.w) * x.h);
+    stats.crop_area += frame_share(ran, x);
     ++stats.crop_runs;
   }
 

@@ -15,6 +15,27 @@ Similarity draw_similarity(camera::sim::Rng& r, int sensor_w, int sensor_h) {
   return s;
 }
 
+Similarity framing_similarity(const camera::sim::SimWindow& w, int first, int count, double grow, double most) {
+  const auto& k = w.camera;
+  double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;
+  for (int t = first; t < first + count && t < int(w.frames.size()); ++t) {
+    const auto& f = w.frames[std::size_t(t)];
+    for (int j = 0; j < camera::sim::kJointCount; ++j) {
+      const auto& p = f.joints_mm[std::size_t(j)];
+      if (!f.valid[std::size_t(j)] || !(p.z() > 1)) continue;
+      const double u = k.fx * p.x() / p.z() + k.cx, v = k.fy * p.y() / p.z() + k.cy;
+      u0 = std::min(u0, u), u1 = std::max(u1, u), v0 = std::min(v0, v), v1 = std::max(v1, v);
+    }
+  }
+  Similarity s;
+  if (u0 > u1) return s;
+  const double bw = std::max(1.0, (u1 - u0) * (1 + 2 * grow)), bh = std::max(1.0, (v1 - v0) * (1 + 2 * grow));
+  s.scale = std::clamp(std::min(k.width / bw, k.height / bh), 1.0, most);
+  s.shift_x = -s.scale * ((u0 + u1) / 2 - 0.5 * k.width);
+  s.shift_y = -s.scale * ((v0 + v1) / 2 - 0.5 * k.height);
+  return s;
+}
+
 std::array<double, 2> warp_point(const Similarity& s, double u, double v, int sensor_w, int sensor_h) {
   const double cx = 0.5 * sensor_w, cy = 0.5 * sensor_h, c = std::cos(s.angle_rad), sn = std::sin(s.angle_rad);
   const double x = u - cx, y = v - cy;

@@ -9,6 +9,7 @@
 #include <array>
 
 #include "camera/sim/rng.h"
+#include "camera/sim/window_stream.h"
 #include "engine/train/pose_norm.h"
 #include "layers/param.h"
 
@@ -20,6 +21,13 @@ struct Similarity {
 
 // scale log-uniform in [0.8, 1.25], angle within +-15 deg, shifts within +-10% of the frame.
 Similarity draw_similarity(camera::sim::Rng& r, int sensor_w, int sensor_h);
+
+// The zoom and shift that frame the dancer: the box around every valid joint's projection
+// over frames [first, first + count) of the window, grown by `grow` of its size on each side,
+// centred and scaled to fill the frame (scale at most `most`, and not below 1: a dancer
+// bigger than the frame is only centred). No valid joint: the identity. What a stage 2 reading
+// a crop of the dancer would see (the "oracle crop" of the stick diagnostic, --frame-zoom).
+Similarity framing_similarity(const camera::sim::SimWindow& w, int first, int count, double grow = 0.1, double most = 4);
 
 // Sensor point (u, v) under the warp, about the frame's centre.
 std::array<double, 2> warp_point(const Similarity& s, double u, double v, int sensor_w, int sensor_h);

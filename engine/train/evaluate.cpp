@@ -77,7 +77,8 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
       sim::SimWindow win;
       next(win);
       builder.clear();
-      builder.add(win, mask, nullptr);
+      const Similarity zoom = framing_similarity(win, 0, cfg.window);
+      builder.add(win, mask, nullptr, spec.frame_zoom ? &zoom : nullptr);
       const Batch& b = builder.batch();
       pose.forward(b.input.act, cfg.window);
       const std::vector<float>& jn = pose.joints();

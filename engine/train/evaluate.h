@@ -22,6 +22,7 @@ struct EvalSpec {
   std::uint64_t seed = 1;
   double seconds_per_scene = 1.0;
   bool true_mask = false;  // multiply by the simulator's mask instead of the mask net's
+  bool frame_zoom = false;  // every window zoomed onto its dancer from the true joints (trainer's --frame-zoom)
   // A window's TORE holds the events of up to this long before it (5 s: all TORE reads, as in
   // `yelan run`); simulated scenes start anywhere in their clip and run this long first.
   double history_s = 5;

@@ -254,7 +254,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                     std::to_string(spec.windows_per_visit) + " (resume with --windows-per-visit " +
                                     std::to_string(wpv) + ")");
       // Nor does a run with other augmentations (run.json without a key: the option was off).
-      for (const auto& [key, on] : {std::pair<const char*, bool>{"occlusion", spec.occlusion}, {"warp", spec.warp}, {"flip", spec.flip}}) {
+      for (const auto& [key, on] : {std::pair<const char*, bool>{"occlusion", spec.occlusion}, {"warp", spec.warp}, {"flip", spec.flip},
+                                  {"frame_zoom", spec.frame_zoom}, {"swap_loss", spec.swap_loss}}) {
         const bool was = j.contains(key) && j[key].is_boolean() && j[key].get<bool>();
         if (was != on)
           throw std::invalid_argument(run_json + ": the run was trained " + (was ? "with" : "without") + " --" + key +
@@ -280,7 +281,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"warmup_steps", spec.warmup_steps}, {"history_s", spec.history_s},
                                       {"windows_per_visit", spec.windows_per_visit},
                                       {"occlusion", spec.occlusion},   {"warp", spec.warp},
-                                      {"flip", spec.flip},             {"mask_reuse", spec.mask_reuse},
+                                      {"flip", spec.flip},             {"frame_zoom", spec.frame_zoom},
+                                      {"swap_loss", spec.swap_loss},
+                                      {"mask_reuse", spec.mask_reuse},
                                       {"empty_weight", spec.empty_weight}, {"dice_weight", spec.dice_weight},
                                       {"seed", spec.seed},
                                       {"mask_weights", spec.mask_weights}, {"init_weights", spec.init_weights},
@@ -353,6 +356,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   // Windows of `frames` read out, plus the mask net's future masks (targets alone).
   // With --mask-reuse, the frames before them that a stage-1 run may have read.
   const int lead = spec.mask_reuse > 0 ? spec.mask_reuse - 1 : 0;
+  const int swap_group = spec.swap_loss ? cfg.window : 0;  // a window's frames are consecutive in a batch
   auto set_window = [&](sim::WindowStreamOptions& o, int frames) {
     o.window = lead + frames + (pose_stage ? 0 : cfg.n_masks - 1);
     o.tore_frames = lead + frames;
@@ -428,7 +432,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         vs.next(w);
         sources.insert(w.scene);
         const auto reuse = reuse_of(kValReuse + std::uint64_t(i + k));
-        val_batches.back()->add(w, mask, nullptr, nullptr, false, reuse ? &*reuse : nullptr);
+        const Similarity zoom = framing_similarity(w, lead, cfg.window);
+        val_batches.back()->add(w, mask, nullptr, spec.frame_zoom ? &zoom : nullptr, false, reuse ? &*reuse : nullptr);
       }
     }
     if (!val_files.empty())
@@ -459,7 +464,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
         pose.forward(b.input.act, cfg.window);
         std::vector<std::array<layers::Act, 3>> dheat;
         std::vector<layers::Floats> store;
-        sum += hpe_loss(pose, cfg.stages, b.target.data(), b.valid.data(), dheat, store).total * nw;
+        sum += hpe_loss(pose, cfg.stages, b.target.data(), b.valid.data(), dheat, store, swap_group).total * nw;
         const std::vector<float>& jn = pose.joints();
         for (int f = 0; f < b.frames; ++f)
           metrics.add(predicted_pose_mm(b, jn, f), b.truth_mm[std::size_t(f)], valid_joints(b, f));
@@ -504,6 +509,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   }
   const std::int64_t first_step = st.step;
   double data_s = 0, step_s = 0;  // since the last epoch line: building batches, whole steps
+  std::int64_t swap_groups = 0, swapped = 0;  // --swap-loss: windows scored, and of them traded, since then
   while (st.step < spec.steps && !result.early_stopped) {
     const auto t0 = std::chrono::steady_clock::now();
     builder.clear();
@@ -513,11 +519,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       sim::Rng occ(spec.seed, 0x0cc1u + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       // Its own stream, so the occluders of a run with --warp are those of one without.
       sim::Rng wr(spec.seed, 0x3a9fu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
-      const Similarity warp = draw_similarity(wr, cfg.sensor_width, cfg.sensor_height);
+      const Similarity warp =
+          spec.frame_zoom ? framing_similarity(w, lead, cfg.window) : draw_similarity(wr, cfg.sensor_width, cfg.sensor_height);
       sim::Rng fr(spec.seed, 0xf11bu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       const bool flip = spec.flip && fr.uniform() < 0.5;
       const auto reuse = reuse_of(kReuseStream + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
-      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp ? &warp : nullptr, flip, reuse ? &*reuse : nullptr);
+      builder.add(w, mask, spec.occlusion ? &occ : nullptr, spec.warp || spec.frame_zoom ? &warp : nullptr, flip, reuse ? &*reuse : nullptr);
     }
     const double built = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     data_s += built;
@@ -529,7 +536,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       pose.forward(batch.input.act, cfg.window);
       std::vector<std::array<layers::Act, 3>> dheat;
       std::vector<layers::Floats> store;
-      loss = hpe_loss(pose, cfg.stages, batch.target.data(), batch.valid.data(), dheat, store).total;
+      const HpeLoss l = hpe_loss(pose, cfg.stages, batch.target.data(), batch.valid.data(), dheat, store, swap_group);
+      loss = l.total;
+      swap_groups += l.groups;
+      swapped += l.swapped;
       pose.backward(batch.input.act, dheat, nullptr);
     } else {
       mask.forward(batch.input.act);
@@ -593,10 +603,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
           << ", validation " << val << " (best " << st.best_val << ")"
           << (val_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(val_mm))) + " mm" : "")
-          << iou_text << ", " << sps
+          << iou_text
+          << (swap_groups ? ", " + std::to_string(std::lround(100.0 * double(swapped) / double(swap_groups))) + "% of windows traded" : "")
+          << ", " << sps
           << " samples/s, lr " << adam.lr() << ", data " << std::lround(100 * data_s / std::max(step_s, 1e-9))
           << "% of step time\n";
-    if (epoch_end) data_s = step_s = 0;
+    if (epoch_end) data_s = step_s = 0, swap_groups = swapped = 0;
     const double run_cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC;
     const bool out_of_time =
         (spec.max_minutes > 0 && wall > spec.max_minutes * 60) || (spec.max_cpu_minutes > 0 && run_cpu > spec.max_cpu_minutes * 60);

@@ -56,6 +56,12 @@ struct TrainSpec {
   bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
   bool warp = false;                // a random similarity per window, input and targets (augment.h)
   bool flip = false;                // half the windows mirrored left to right, input and targets (augment.h)
+  // every window, training and validation, zoomed onto its dancer from the true joints
+  // (augment.h framing_similarity): a diagnostic of what heatmap resolution on the dancer buys
+  bool frame_zoom = false;
+  // each window scored against its joints or with left and right traded, whichever the net
+  // is nearer to (hpe_loss's swap_group), training and validation loss; MPJPE stays strict
+  bool swap_loss = false;
   float empty_weight = 1;           // mask stage: a window showing nobody weighs this much in
                                     // the loss (nobody_weights); validation is never weighted
   float dice_weight = 0;            // mask stage: the soft Dice term's weight (mask_loss); the
