@@ -530,6 +530,12 @@ case "$what" in
   train-sk-sided)
     CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SKS/train train pose "${SK_NAME:-sk-sided}" "${STICK_STEPS:-1500}" \
       --val-data "$DATA_SKS/val" --lr 1e-3 ;;
+  # sk-swap: sk-base with --swap-loss (each window scored against its joints or the left/right-
+  # traded ones, whichever the net is nearer to): can a net excused from telling the sides
+  # apart place the limbs?
+  train-sk-swap)
+    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SK/train train pose "${SK_NAME:-sk-swap}" "${STICK_STEPS:-1500}" \
+      --val-data "$DATA_SK/val" --lr 1e-3 --swap-loss ;;
   # pose-s24-free's recipe exactly (1000 steps on ds-s9 behind the default's stage 1 and its
   # reused masks, lr 3e-4, from pose-s21-reuse), with pose.hourglass_skip.
   train-pose-s26-skip)
