@@ -165,6 +165,15 @@ masked_pose() {
     --occlusion --lr 3e-4 --init "$init" "$@"
 }
 
+# sk_run NAME DIR [flags]: the stick recipe of 2026-12-01 (twenty-seventh) on DIR/{train,val}:
+# STICK_CFG (default the shipped stage 2's config) from a random init, lr 1e-3 cosine.
+sk_run() {
+  local name=$1 dir=$2
+  shift 2
+  CFG=${STICK_CFG:-$STICK_CFG0} DATA=$dir/train train pose "${SK_NAME:-$name}" "${STICK_STEPS:-1500}" \
+    --val-data "$dir/val" --lr 1e-3 "$@"
+}
+
 mkdir -p "$RUNS"
 # The targets: the case labels of the dispatch below.
 targets() { sed -n 's/^  \([a-z0-9-]*\))\( .*\)\{0,1\}$/\1/p' "$0"; }
@@ -514,12 +523,8 @@ case "$what" in
   # sk-base: the default's stage 2 from a random init on sk (STICK_CFG: another config,
   # SK_NAME the run's name); sk-frame: the same with every window zoomed onto its dancer
   # (--frame-zoom: the oracle crop), training and validation.
-  train-sk-base)
-    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SK/train train pose "${SK_NAME:-sk-base}" "${STICK_STEPS:-1500}" \
-      --val-data "$DATA_SK/val" --lr 1e-3 ;;
-  train-sk-frame)
-    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SK/train train pose "${SK_NAME:-sk-frame}" "${STICK_STEPS:-1500}" \
-      --val-data "$DATA_SK/val" --lr 1e-3 --frame-zoom ;;
+  train-sk-base) sk_run sk-base "$DATA_SK" ;;
+  train-sk-frame) sk_run sk-frame "$DATA_SK" --frame-zoom ;;
   # Sided sticks (stick_figure.py --sided: the right side's bones ON events, the left's OFF):
   # a plain stick figure from the back is the front's mirror image, so a net can only hedge
   # between the hands; sk-sided asks whether telling the sides apart is what holds it.
@@ -527,15 +532,11 @@ case "$what" in
     for split in val train; do
       /usr/bin/python3 benchmarks/training/stick_figure.py --sided "$DATA_SK_SRC/$split" "$DATA_SKS/$split"
     done ;;
-  train-sk-sided)
-    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SKS/train train pose "${SK_NAME:-sk-sided}" "${STICK_STEPS:-1500}" \
-      --val-data "$DATA_SKS/val" --lr 1e-3 ;;
+  train-sk-sided) sk_run sk-sided "$DATA_SKS" ;;
   # sk-swap: sk-base with --swap-loss (each window scored against its joints or the left/right-
   # traded ones, whichever the net is nearer to): can a net excused from telling the sides
   # apart place the limbs?
-  train-sk-swap)
-    CFG=${STICK_CFG:-$STICK_CFG0} DATA=$DATA_SK/train train pose "${SK_NAME:-sk-swap}" "${STICK_STEPS:-1500}" \
-      --val-data "$DATA_SK/val" --lr 1e-3 --swap-loss ;;
+  train-sk-swap) sk_run sk-swap "$DATA_SK" --swap-loss ;;
   # pose-s24-free's recipe exactly (1000 steps on ds-s9 behind the default's stage 1 and its
   # reused masks, lr 3e-4, from pose-s21-reuse), with pose.hourglass_skip.
   train-pose-s26-skip)
