@@ -174,8 +174,15 @@ TEST_CASE("every byte of an event HDF5 file's head, zeroed or bit-flipped: an er
   REQUIRE(bytes.size() > 4096);
   int refused = 0, read = 0;
   // Every 3rd byte of the superblock and the metadata after it (where the crashes were found),
-  // two mutations each (every byte with YELAN_SLOW_TESTS set).
-  const int step = std::getenv("YELAN_SLOW_TESTS") ? 1 : 3;
+  // two mutations each (every byte with YELAN_SLOW_TESTS set; every 12th in a sanitizer
+  // build, where each vetting child costs several times more and scripts/fuzz covers the
+  // reader at length).
+#if defined(__SANITIZE_ADDRESS__)
+  const int thinned = 12;
+#else
+  const int thinned = 3;
+#endif
+  const int step = std::getenv("YELAN_SLOW_TESTS") ? 1 : thinned;
   for (std::size_t at = 0; at < 4096; at += std::size_t(step)) {
     for (const unsigned char flip : {0x00, 0x08}) {
       std::vector<unsigned char> b = bytes;
@@ -200,7 +207,7 @@ TEST_CASE("every byte of an event HDF5 file's head, zeroed or bit-flipped: an er
   }
   INFO(refused << " refused, " << read << " read");
   CHECK(refused > 0);
-  CHECK(refused + read > 1000);
+  CHECK(refused + read > 3000 / step);  // a zero byte zeroed is no mutation: 2 in 5 here
 }
 
 TEST_CASE("the real DAVIS recording converted to ours, two known libhdf5 crashes planted: exit 2 from info, convert and run",
