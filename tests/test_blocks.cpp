@@ -11,7 +11,7 @@
 using namespace yelan::layers;
 using yelan::test::check_fd_kinked;
 using yelan::test::dot;
-using yelan::test::kSanitizerThinning;
+using yelan::test::sanitizer_stride;
 using yelan::test::Owned;
 using yelan::test::sample_all;
 using yelan::test::sample_real;
@@ -118,7 +118,7 @@ TEST_CASE("hourglass stage, plain and with the skip past its bottleneck: gradien
     int convs = 0;
     for (auto& p : params)
       if (p.param->trainable && p.param->shape.size() == 4 && ++convs)
-        agree(p.param->value.data(), p.param->grad.data(), sample_all(p.param->numel(), 5 * kSanitizerThinning), p.key);
+        agree(p.param->value.data(), p.param->grad.data(), sample_all(p.param->numel(), 5), p.key);
     CHECK(convs == 30);  // ten residual blocks of two convs and a shortcut conv
   }
   // The skip changes the function and not the parameters.
@@ -174,8 +174,8 @@ TEST_CASE("window ConvLSTM (bidirectional and causal): BPTT gradients", "[layers
     check_fd_kinked(loss, x.mem.data(), dx.mem.data(), sample_real(x, 5), 1e-2, 3e-3, "dx", 0.9);
     for (auto& p : params)
       check_fd_kinked(loss, p.param->value.data(), p.param->grad.data(),
-                      sample_all(p.param->numel(), p.param->numel() > 40 ? 11 * kSanitizerThinning : 1), 1e-2, 3e-3,
-                      p.key.c_str(), 0.9);
+                      sample_all(p.param->numel(), p.param->numel() > 40 ? sanitizer_stride(p.param->numel(), 11) : 1),
+                      1e-2, 3e-3, p.key.c_str(), 0.9);
   }
 }
 

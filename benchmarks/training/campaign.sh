@@ -537,6 +537,11 @@ case "$what" in
   # traded ones, whichever the net is nearer to): can a net excused from telling the sides
   # apart place the limbs?
   train-sk-swap) sk_run sk-swap "$DATA_SK" --swap-loss ;;
+  # The same recipe on the events the sticks were drawn from (sk-src: the same dancers, views,
+  # motions and labels; the simulator's faces and shirt fronts are all that tells a front from
+  # a back): does a net see the sides in events, and does --swap-loss change that?
+  train-ev-base) sk_run ev-base "$DATA_SK_SRC" ;;
+  train-ev-swap) sk_run ev-swap "$DATA_SK_SRC" --swap-loss ;;
   # pose-s24-free's recipe exactly (1000 steps on ds-s9 behind the default's stage 1 and its
   # reused masks, lr 3e-4, from pose-s21-reuse), with pose.hourglass_skip.
   train-pose-s26-skip)
