@@ -54,8 +54,6 @@ double js_map(const Act& p, int n, int lane, const float* q, double scale, const
 
 }  // namespace
 
-int mirror_joint(int j) { return j == 0 ? 0 : j % 2 ? j + 1 : j - 1; }
-
 HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target_in, const float* valid_in,
                  std::vector<std::array<Act, 3>>& dheat, std::vector<layers::Floats>& store, int swap_group) {
   HpeLoss out;

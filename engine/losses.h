@@ -14,6 +14,7 @@
 #include <array>
 #include <vector>
 
+#include "engine/joints.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
 
@@ -36,8 +37,6 @@ struct HpeLoss {
 HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const float* valid,
                  std::vector<std::array<layers::Act, 3>>& dheat, std::vector<layers::Floats>& store, int swap_group = 0);
 
-// The SPEC joint that trades places with joint j when left and right are swapped.
-int mirror_joint(int j);
 
 struct MaskLoss {
   double total = 0, bce_first = 0, bce_all = 0, score_mse = 0;

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "layers/param.h"
+#include "test_util.h"
 
 namespace yelan::test {
 
@@ -91,16 +92,10 @@ inline std::vector<std::size_t> sample_real(const Owned& a, std::size_t stride) 
   return out;
 }
 
-// Sanitizer builds run the numerics several times slower; their run is there for memory and
-// undefined behaviour, the release run checks every sample, so a long finite-difference sweep
+// Sanitizer builds run the numerics several times slower, so a long finite-difference sweep
 // over a big tensor samples up to 4x sparser there, never below 40 samples (kinks skip many).
 inline std::size_t sanitizer_stride(std::size_t numel, std::size_t stride) {
-#if defined(__SANITIZE_ADDRESS__)
-  return std::max(stride, std::min(4 * stride, numel / 40));
-#else
-  (void)numel;
-  return stride;
-#endif
+  return kSanitized ? std::max(stride, std::min(4 * stride, numel / 40)) : stride;
 }
 
 inline std::vector<std::size_t> sample_all(std::size_t n, std::size_t stride) {

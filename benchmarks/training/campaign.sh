@@ -542,6 +542,10 @@ case "$what" in
   # a back): does a net see the sides in events, and does --swap-loss change that?
   train-ev-base) sk_run ev-base "$DATA_SK_SRC" ;;
   train-ev-swap) sk_run ev-swap "$DATA_SK_SRC" --swap-loss ;;
+  # ev-from-sided: ev-base's recipe from sk-sided's weights at its step 4000 (its committed
+  # checkpoint) instead of a random init: does a net that reads sided sticks, limb by limb,
+  # read the events those sticks were drawn from any better?
+  train-ev-from-sided) sk_run ev-from-sided "$DATA_SK_SRC" --init "${EV_INIT:-models/campaign/sk-sided/checkpoint.h5}" ;;
   # pose-s24-free's recipe exactly (1000 steps on ds-s9 behind the default's stage 1 and its
   # reused masks, lr 3e-4, from pose-s21-reuse), with pose.hourglass_skip.
   train-pose-s26-skip)

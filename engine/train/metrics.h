@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "engine/joints.h"
 #include "engine/train/pose_norm.h"
 
 namespace yelan::train {
@@ -17,12 +18,12 @@ namespace yelan::train {
 inline constexpr int kJoints = 13;
 using Pose13 = std::array<std::array<double, 3>, kJoints>;
 
-// Per-joint values (a pose, validity flags) with left and right exchanged: the joints come in
-// (right, left) pairs from the shoulders on.
+// Per-joint values (a pose, validity flags) with left and right exchanged.
 template <class T>
-std::array<T, kJoints> swap_left_right(std::array<T, kJoints> p) {
-  for (std::size_t a = 1; a + 1 < p.size(); a += 2) std::swap(p[a], p[a + 1]);
-  return p;
+std::array<T, kJoints> swap_left_right(const std::array<T, kJoints>& p) {
+  std::array<T, kJoints> out;
+  for (int j = 0; j < kJoints; ++j) out[std::size_t(j)] = p[std::size_t(mirror_joint(j))];
+  return out;
 }
 
 struct PoseScores {

@@ -177,12 +177,7 @@ TEST_CASE("every byte of an event HDF5 file's head, zeroed or bit-flipped: an er
   // two mutations each (every byte with YELAN_SLOW_TESTS set; every 12th in a sanitizer
   // build, where each vetting child costs several times more and scripts/fuzz covers the
   // reader at length).
-#if defined(__SANITIZE_ADDRESS__)
-  const int thinned = 12;
-#else
-  const int thinned = 3;
-#endif
-  const int step = std::getenv("YELAN_SLOW_TESTS") ? 1 : thinned;
+  const int step = std::getenv("YELAN_SLOW_TESTS") ? 1 : test::kSanitized ? 12 : 3;
   for (std::size_t at = 0; at < 4096; at += std::size_t(step)) {
     for (const unsigned char flip : {0x00, 0x08}) {
       std::vector<unsigned char> b = bytes;
@@ -249,17 +244,7 @@ TEST_CASE("the real DAVIS recording converted to ours, two known libhdf5 crashes
 }
 
 TEST_CASE("vetting in a child: a read past the memory budget is an error, the budget on top of the caller's own", "[io][h5][untrusted]") {
-#if defined(__SANITIZE_ADDRESS__)
-  const bool asan = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-  const bool asan = true;
-#else
-  const bool asan = false;
-#endif
-#else
-  const bool asan = false;
-#endif
+  const bool asan = test::kSanitized;
   if (asan) {  // untrusted.cpp sets no RLIMIT_AS under ASan (it reserves terabytes of address space)
     std::printf("SKIP: no address-space limit under AddressSanitizer\n");
     std::exit(77);
