@@ -55,7 +55,7 @@ double js_map(const Act& p, int n, int lane, const float* q, double scale, const
 }  // namespace
 
 HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target_in, const float* valid_in,
-                 std::vector<std::array<Act, 3>>& dheat, std::vector<layers::Floats>& store, int swap_group) {
+                 std::vector<PoseNet::StageGrads>& dheat, std::vector<layers::Floats>& store, int swap_group) {
   HpeLoss out;
   const Act& ref = net.heatmap(0, 0);
   const int n = ref.n, J = ref.c, h = ref.h, w = ref.w;
@@ -64,7 +64,7 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target_in, const f
   if (swap_group > 0) {
     if (J != 13) throw std::invalid_argument("hpe loss: trading left and right needs SPEC's 13 joints, not " + std::to_string(J));
     std::vector<float> last(std::size_t(n) * J * 3);
-    layers::dsnt_joints_forward(net.heatmap(stages - 1, 0), net.heatmap(stages - 1, 1), net.heatmap(stages - 1, 2), last.data());
+    net.stage_joints(stages - 1, last.data());
     swapped_target.assign(target_in, target_in + std::size_t(n) * J * 3);
     swapped_valid.assign(valid_in, valid_in + std::size_t(n) * J);
     auto dist = [&](std::size_t k_pred, std::size_t k_tgt) {
@@ -98,17 +98,18 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target_in, const f
   for (int i = 0; i < n * J; ++i) count += valid[i];
   const double denom = std::max(count, 1.0) * stages;  // masked mean, then the stage mean
   dheat.assign(stages, {});
-  store.resize(std::size_t(stages) * 3);
+  store.resize(std::size_t(stages) * 4);
   std::vector<float> joints(std::size_t(n) * J * 3), dj(joints.size()), gauss(std::size_t(h) * w);
   for (int t = 0; t < stages; ++t) {
-    for (int p = 0; p < 3; ++p) {
-      const Act& hm = net.heatmap(t, p);
-      layers::Floats& f = store[t * 3 + p];
+    const Act* depth = net.depth_map(t);
+    for (int p = 0; p < (depth ? 4 : 3); ++p) {
+      const Act& hm = p < 3 ? net.heatmap(t, p) : *depth;
+      layers::Floats& f = store[t * 4 + p];
       if (f.size() != hm.floats()) f = layers::Floats(hm.floats());
       f.zero();
       dheat[t][p] = Act{f.data(), hm.n, hm.c, hm.h, hm.w};
     }
-    layers::dsnt_joints_forward(net.heatmap(t, 0), net.heatmap(t, 1), net.heatmap(t, 2), joints.data());
+    net.stage_joints(t, joints.data());
     double stage = 0, euclid = 0;
     std::fill(dj.begin(), dj.end(), 0.f);
     for (int i = 0; i < n; ++i)
@@ -139,7 +140,8 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target_in, const f
       tmp[p] = layers::Floats(dheat[t][p].floats());
       g[p] = Act{tmp[p].data(), dheat[t][p].n, dheat[t][p].c, dheat[t][p].h, dheat[t][p].w};
     }
-    layers::dsnt_joints_backward(dj.data(), g[0], g[1], g[2]);
+    // with depth maps, z's gradient reaches them and the xy map under them, not zy and xz
+    layers::stage_joints_backward(dj.data(), net.heatmap(t, 0), depth, g[0], g[1], g[2], depth ? &dheat[t][3] : nullptr);
     for (int p = 0; p < 3; ++p) layers::accumulate(g[p], dheat[t][p]);
     stage += euclid;
     out.per_stage.push_back(stage / std::max(count, 1.0));

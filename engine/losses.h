@@ -35,8 +35,7 @@ struct HpeLoss {
 // that cannot tell a dancer's back from the front may commit to either labelling instead of
 // hedging between the hands, so whether it can place the limbs at all is seen apart.
 HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const float* valid,
-                 std::vector<std::array<layers::Act, 3>>& dheat, std::vector<layers::Floats>& store, int swap_group = 0);
-
+                 std::vector<PoseNet::StageGrads>& dheat, std::vector<layers::Floats>& store, int swap_group = 0);
 
 struct MaskLoss {
   double total = 0, bce_first = 0, bce_all = 0, score_mse = 0;

@@ -88,6 +88,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.crop_margin = p.contains("crop_margin") ? get_int(p, where + ".pose", "crop_margin") : 0;
   c.head_stride = p.contains("head_stride") ? get_int(p, where + ".pose", "head_stride") : 8;
   c.hourglass_skip = get_bool_or(p, where + ".pose", "hourglass_skip", false);
+  c.depth_map = get_bool_or(p, where + ".pose", "depth_map", false);
   c.representation = i.contains("representation") ? get_str(i, where + ".input", "representation") : "tore";
   if (d.contains("run")) {
     const json& r = section(d, "run", where);

@@ -44,6 +44,11 @@ struct ModelConfig {
   // block's output (mid resolution) to its up block's, so the heatmaps see the mid resolution
   // past the half-resolution bottleneck; the same parameters.
   bool hourglass_skip = false;
+  // pose.depth_map (not the paper's; default false): each stage adds a fourth hourglass whose
+  // output is a depth map per joint, and a joint's z is that map averaged under its xy
+  // probability map (layers::expected_depth_forward) instead of the zy and xz marginals'
+  // coordinates (still trained by their JS terms and read by the next stage's combiner).
+  bool depth_map = false;
   // input.representation: "tore" (2K = channels TORE planes) or "counts" (2 channels: events
   // of each polarity in the last frame period, log(1 + n); the constant-time-frame baseline)
   std::string representation = "tore";

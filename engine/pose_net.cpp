@@ -35,6 +35,9 @@ PoseNet::PoseNet(const ModelConfig& cfg)
     for (auto& p : stages_[t].planes)
       p = std::make_unique<layers::HourglassStage>(mid, cfg.joints, cfg.hourglass_lo(), cfg.hourglass_hi(), mid_h_, mid_w_,
                                                    cfg.hourglass_skip);
+    if (cfg.depth_map)
+      stages_[t].depth = std::make_unique<layers::HourglassStage>(mid, cfg.joints, cfg.hourglass_lo(), cfg.hourglass_hi(), mid_h_,
+                                                                  mid_w_, cfg.hourglass_skip);
   }
 }
 
@@ -130,13 +133,18 @@ void PoseNet::tail_forward(const Act& feats, int n_images) {
       st.probs[p] = st.prob_buf[p].like(st.logits[p]);
       layers::flat_softmax_forward(st.logits[p], st.probs[p]);
     }
+    if (st.depth) st.depth_out = st.depth->forward(st.inp);
   }
-  const Stage& last = stages_[T - 1];
   joints_.resize(std::size_t(n_images) * J * 3);
-  layers::dsnt_joints_forward(last.probs[0], last.probs[1], last.probs[2], joints_.data());
+  stage_joints(T - 1, joints_.data());
 }
 
-void PoseNet::backward(const Act& x, const std::vector<std::array<Act, 3>>& dheat, const float* djoints) {
+void PoseNet::stage_joints(int t, float* out) const {
+  const Stage& st = stages_[std::size_t(t)];
+  layers::stage_joints_forward(st.probs[0], st.probs[1], st.probs[2], st.depth ? &st.depth_out : nullptr, out);
+}
+
+void PoseNet::backward(const Act& x, const std::vector<StageGrads>& dheat, const float* djoints) {
   if (cropped_) throw std::logic_error("pose net: backward after forward_cropped (inference only)");
   const int T = cfg_.stages, J = cfg_.joints;
   const Act shape = stages_[0].inp;
@@ -152,17 +160,30 @@ void PoseNet::backward(const Act& x, const std::vector<std::array<Act, 3>>& dhea
       if (t == T - 1) zero(dprob[p]);
       if (t < int(dheat.size()) && dheat[t][p].data) layers::accumulate(dheat[t][p], dprob[p]);
     }
+    Act ddepth;
+    if (st.depth) {
+      ddepth = st.ddepth_buf.like(st.depth_out);
+      zero(ddepth);
+      if (t < int(dheat.size()) && dheat[t][3].data) layers::accumulate(dheat[t][3], ddepth);
+    }
     if (t == T - 1 && djoints) {
       std::array<Act, 3> dj;
       for (int p = 0; p < 3; ++p) dj[p] = d_dsnt_[p].like(st.probs[p]);
-      layers::dsnt_joints_backward(djoints, dj[0], dj[1], dj[2]);
+      const Act dd = st.depth ? d_depth_joints_.like(st.depth_out) : Act{};
+      layers::stage_joints_backward(djoints, st.probs[0], st.depth ? &st.depth_out : nullptr, dj[0], dj[1], dj[2], &dd);
       for (int p = 0; p < 3; ++p) layers::accumulate(dj[p], dprob[p]);
+      if (st.depth) layers::accumulate(dd, ddepth);
     }
     for (int p = 0; p < 3; ++p) {
       const Act dlogit = d_logits_.like(st.logits[p]);
       layers::flat_softmax_backward(st.probs[p], dprob[p], dlogit);
       const Act dh = d_hg_in_.like(shape);
       st.planes[p]->backward(st.inp, dlogit, dh);
+      layers::accumulate(dh, dI);
+    }
+    if (st.depth) {
+      const Act dh = d_hg_in_.like(shape);
+      st.depth->backward(st.inp, ddepth, dh);
       layers::accumulate(dh, dI);
     }
     if (t > 0) {  // inp_t = inp_{t-1} + combiner(cat heatmaps_{t-1}): dI flows on unchanged

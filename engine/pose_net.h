@@ -34,6 +34,8 @@ class PoseNet : public layers::Module<PoseNet> {
       for (int t = 0; t < cfg_.stages; ++t) f(*stages_[t].planes[p], {plane_names[p] + std::to_string(t) + ".", 100u + 3 * t + p});
     for (int t = 1; t < cfg_.stages; ++t)
       f(*stages_[t].combiner, {"hm_combiners." + std::to_string(t - 1) + ".combine_block.", 200u + t - 1});
+    if (cfg_.depth_map)
+      for (int t = 0; t < cfg_.stages; ++t) f(*stages_[t].depth, {"depth_hm_cnns." + std::to_string(t) + ".", 300u + t});
   }
   void weights_changed() {
     have_zero_feat_ = false;
@@ -63,14 +65,21 @@ class PoseNet : public layers::Module<PoseNet> {
   // (n x J x 3) of the last stage, valid until the next forward.
   const layers::Act& heatmap(int stage, int plane) const { return stages_[stage].probs[plane]; }
   const std::vector<float>& joints() const { return joints_; }
+  // Stage t's depth maps (pose.depth_map; null without), valid until the next forward.
+  const layers::Act* depth_map(int stage) const { return cfg_.depth_map ? &stages_[stage].depth_out : nullptr; }
+  // Stage t's normalised joints (n x J x 3): x, y from its xy map; z from its zy and xz maps,
+  // or from its depth map under its xy map (pose.depth_map). joints() is the last stage's.
+  void stage_joints(int stage, float* out) const;
   // The ResNet head's output (n x resnet_mid x mid_h x mid_w) of the last forward.
   const layers::Act& head_features() const { return feats_; }
   int mid_h() const { return mid_h_; }
   int mid_w() const { return mid_w_; }
 
-  // dheat[t][p]: dL/d probability map (data may be null: no direct loss there); djoints:
+  // dL/d a stage's xy, zy and xz probability maps and, with pose.depth_map, its depth map.
+  using StageGrads = std::array<layers::Act, 4>;
+  // dheat[t][p]: dL/d stage t's map p (data may be null: no direct loss there); djoints:
   // dL/djoints (may be null). Adds every parameter's gradient.
-  void backward(const layers::Act& x, const std::vector<std::array<layers::Act, 3>>& dheat, const float* djoints);
+  void backward(const layers::Act& x, const std::vector<StageGrads>& dheat, const float* djoints);
 
  private:
   void check_input(const layers::Act& x) const;
@@ -91,7 +100,9 @@ class PoseNet : public layers::Module<PoseNet> {
   struct Stage {
     std::unique_ptr<layers::ResidualBlock> combiner;  // stages after the first: over the previous heatmaps
     std::array<std::unique_ptr<layers::HourglassStage>, 3> planes;  // xy, zy, xz
-    layers::ActBuf hmcat_buf, inp_buf, prob_buf[3], dprob_buf[3];
+    std::unique_ptr<layers::HourglassStage> depth;                   // pose.depth_map only
+    layers::Act depth_out;                                           // its output: the depth maps
+    layers::ActBuf hmcat_buf, inp_buf, prob_buf[3], dprob_buf[3], ddepth_buf;
     layers::Act hmcat;  // cat[xy, zy, xz] of the previous stage's heatmaps: the combiner's input
     layers::Act inp;    // the hourglasses' input: the skip block's output, plus the combiner's after the first
     std::array<layers::Act, 3> logits, probs;
@@ -114,6 +125,7 @@ class PoseNet : public layers::Module<PoseNet> {
   // backward only, each dL/d the activation it is named after
   layers::ActBuf d_inp_;            // a stage's input (every stage adds to the next one's)
   layers::ActBuf d_dsnt_[3];        // the last stage's probabilities through the joints (xy, zy, xz)
+  layers::ActBuf d_depth_joints_;   // the last stage's depth maps through the joints
   layers::ActBuf d_logits_, d_hg_in_;  // one plane at a time: its logits, its hourglass's input
   layers::ActBuf d_hmcat_;          // a combiner's input
   layers::ActBuf d_cat_;            // the skip block's input cat[feats, convlstm(feats)]

@@ -1,6 +1,7 @@
 #include "layers/hourglass.h"
 
 #include <cstring>
+#include <stdexcept>
 #include <vector>
 
 #include "kernels/heatmap.h"
@@ -122,6 +123,55 @@ void dsnt_joints_backward(const float* dj, const Act& dxy, const Act& dzy, const
   k.dsnt_bwd(planes, dxy.h, dxy.w, a.data(), dxy.data);
   k.dsnt_bwd(planes, dzy.h, dzy.w, b.data(), dzy.data);
   k.dsnt_bwd(planes, dxz.h, dxz.w, c.data(), dxz.data);
+}
+
+void expected_depth_forward(const Act& xy, const Act& depth, float* joints) {
+  const int J = xy.c;
+  const std::size_t P = xy.pixels();
+  for (int n = 0; n < xy.n; ++n)
+    for (int j = 0; j < J; ++j) {
+      const float* p = xy.lane(n, j, 0);
+      const float* d = depth.lane(n, j, 0);
+      double z = 0;
+      for (std::size_t i = 0; i < P; ++i) z += double(p[i * 16]) * d[i * 16];
+      joints[(std::size_t(n) * J + j) * 3 + 2] = float(z);
+    }
+}
+
+void expected_depth_backward(const float* dj, const Act& xy, const Act& depth, const Act& dxy, const Act& ddepth) {
+  std::memset(ddepth.data, 0, ddepth.floats() * sizeof(float));
+  const int J = xy.c;
+  const std::size_t P = xy.pixels();
+  for (int n = 0; n < xy.n; ++n)
+    for (int j = 0; j < J; ++j) {
+      const float g = dj[(std::size_t(n) * J + j) * 3 + 2];
+      const float* p = xy.lane(n, j, 0);
+      const float* d = depth.lane(n, j, 0);
+      float* gp = dxy.lane(n, j, 0);
+      float* gd = ddepth.lane(n, j, 0);
+      for (std::size_t i = 0; i < P; ++i) {
+        gp[i * 16] += g * d[i * 16];
+        gd[i * 16] = g * p[i * 16];
+      }
+    }
+}
+
+void stage_joints_forward(const Act& xy, const Act& zy, const Act& xz, const Act* depth, float* joints) {
+  dsnt_joints_forward(xy, zy, xz, joints);
+  if (depth) expected_depth_forward(xy, *depth, joints);
+}
+
+void stage_joints_backward(const float* dj, const Act& xy, const Act* depth, const Act& dxy, const Act& dzy, const Act& dxz,
+                           const Act* ddepth) {
+  if (!depth) {
+    dsnt_joints_backward(dj, dxy, dzy, dxz);
+    return;
+  }
+  if (!ddepth) throw std::invalid_argument("stage joints backward: depth maps without their gradient");
+  std::vector<float> xy_only(dj, dj + std::size_t(xy.n) * xy.c * 3);
+  for (std::size_t k = 2; k < xy_only.size(); k += 3) xy_only[k] = 0.f;
+  dsnt_joints_backward(xy_only.data(), dxy, dzy, dxz);
+  expected_depth_backward(dj, xy, *depth, dxy, *ddepth);
 }
 
 }  // namespace yelan::layers

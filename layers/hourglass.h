@@ -39,4 +39,20 @@ void dsnt_joints_forward(const Act& xy, const Act& zy, const Act& xz, float* joi
 // Gradients of the three probability maps from dL/djoints (overwrites them).
 void dsnt_joints_backward(const float* djoints, const Act& dxy, const Act& dzy, const Act& dxz);
 
+// Depth read off a map (pose.depth_map, not the paper's): each joint's z is its depth map
+// averaged under its xy probability map, z_j = sum_px xy_j(px) depth_j(px), instead of the zy
+// and xz marginals' coordinates. A convolution places a peak where its evidence lies, so a
+// marginal whose axis is depth asks it to move evidence across the image; a depth map asks
+// only for a value where the joint is. Overwrites joints[.][2].
+void expected_depth_forward(const Act& xy, const Act& depth, float* joints);
+// From dL/djoints' z: adds dL/dxy into dxy, overwrites ddepth.
+void expected_depth_backward(const float* djoints, const Act& xy, const Act& depth, const Act& dxy, const Act& ddepth);
+// The joints of one stage, with or without depth maps (depth null: DSNT alone), and their
+// backward: x and y through DSNT; z through DSNT's zy and xz or, with depth maps, through
+// expected_depth_backward (ddepth overwritten, dzy and dxz then get no z). Overwrites dxy,
+// dzy, dxz as dsnt_joints_backward does.
+void stage_joints_forward(const Act& xy, const Act& zy, const Act& xz, const Act* depth, float* joints);
+void stage_joints_backward(const float* djoints, const Act& xy, const Act* depth, const Act& dxy, const Act& dzy,
+                           const Act& dxz, const Act* ddepth);
+
 }  // namespace yelan::layers

@@ -134,6 +134,48 @@ TEST_CASE("hourglass stage, plain and with the skip past its bottleneck: gradien
   CHECK(diff > 1e-3);
 }
 
+TEST_CASE("expected depth under the xy maps: the sum by hand, gradients of both maps by finite differences", "[layers][blocks]") {
+  // Odd shapes: 2 images, 19 joints (a second, partly padded channel block), 5 x 7 maps.
+  const int n = 2, J = 19, h = 5, w = 7;
+  Owned logits(n, J, h, w, 3), depth(n, J, h, w, 4), xy(n, J, h, w), dxy(n, J, h, w), ddepth(n, J, h, w), dlogits(n, J, h, w);
+  std::vector<float> dj(std::size_t(n) * J * 3);
+  for (std::size_t i = 0; i < dj.size(); ++i) dj[i] = float(std::cos(0.9 * double(i)));
+  auto joints_z = [&](std::vector<float>& out) {
+    flat_softmax_forward(logits.act, xy.act);
+    expected_depth_forward(xy.act, depth.act, out.data());
+  };
+  std::vector<float> out(dj.size(), -7.f);
+  joints_z(out);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < J; ++j) {
+      double z = 0;
+      for (std::size_t px = 0; px < xy.act.pixels(); ++px) z += double(*xy.act.lane(i, j, px)) * *depth.act.lane(i, j, px);
+      const std::size_t k = (std::size_t(i) * J + j) * 3;
+      CHECK(out[k + 2] == Approx(z).margin(1e-6));
+      CHECK(out[k] == -7.f);  // x and y are DSNT's, left alone
+      CHECK(out[k + 1] == -7.f);
+    }
+  auto loss = [&] {
+    std::vector<float> o(dj.size());
+    joints_z(o);
+    double s = 0;
+    for (std::size_t k = 2; k < o.size(); k += 3) s += double(dj[k]) * o[k];
+    return s;
+  };
+  loss();
+  std::memset(dxy.act.data, 0, dxy.act.floats() * sizeof(float));
+  expected_depth_backward(dj.data(), xy.act, depth.act, dxy.act, ddepth.act);
+  flat_softmax_backward(xy.act, dxy.act, dlogits.act);
+  check_fd_kinked(loss, depth.mem.data(), ddepth.mem.data(), sample_real(depth, 3), 1e-3, 1e-3, "ddepth", 1.0);
+  check_fd_kinked(loss, logits.mem.data(), dlogits.mem.data(), sample_real(logits, 3), 1e-3, 1e-3, "dlogits (through xy)", 1.0);
+  // It adds into dxy: what was there stays.
+  std::memset(dxy.act.data, 0, dxy.act.floats() * sizeof(float));
+  *dxy.act.lane(1, 17, 4) = 5.f;
+  expected_depth_backward(dj.data(), xy.act, depth.act, dxy.act, ddepth.act);
+  const std::size_t k = (std::size_t(1) * J + 17) * 3 + 2;
+  CHECK(*dxy.act.lane(1, 17, 4) == Approx(5.f + dj[k] * *depth.act.lane(1, 17, 4)));
+}
+
 TEST_CASE("blocks name their parameters as the reference's state_dict", "[layers][blocks]") {
   ResidualBlock r(4, 8, ResidualKind::down);
   ParamList p;

@@ -70,6 +70,13 @@ int check_pose_gradients(PoseNet& net, const ModelConfig& cfg, std::uint64_t see
   return checked;
 }
 
+// The tiny config with one more pose key, e.g. "\"hourglass_skip\": true".
+ModelConfig tiny_with(const std::string& pose_key, const std::string& name) {
+  std::string text = load_model_config("tiny").json;
+  text.insert(text.find("\"convlstm\""), pose_key + ", ");
+  return parse_model_config(text, name);
+}
+
 }  // namespace
 
 TEST_CASE("pose net parameters match the reference's names, shapes and count", "[networks][pose]") {
@@ -354,9 +361,7 @@ TEST_CASE("pose net at head_stride 4: the same parameters, heatmaps twice as fin
 
 TEST_CASE("pose net with hourglass_skip: the same parameters, other joints, gradients by finite differences", "[networks][pose]") {
   const ModelConfig base = load_model_config("tiny");
-  std::string text = base.json;
-  text.insert(text.find("\"convlstm\""), "\"hourglass_skip\": true, ");
-  const ModelConfig cfg = parse_model_config(text, "tiny-skip");
+  const ModelConfig cfg = tiny_with("\"hourglass_skip\": true", "tiny-skip");
   REQUIRE(cfg.hourglass_skip);
   CHECK_FALSE(base.hourglass_skip);
   PoseNet skip(cfg), plain(base);
@@ -379,6 +384,74 @@ TEST_CASE("pose net with hourglass_skip: the same parameters, other joints, grad
   PoseNet net(cfg);
   CHECK(check_pose_gradients(net, cfg, 2, [](const std::string&, int layer) { return layer % 23 == 0; }) >= 10);
   // (The skip's backward is checked block by block in tests/test_blocks.cpp.)
+}
+
+TEST_CASE("pose net with depth_map: a fourth hourglass per stage, z read off it under the xy map, gradients by finite differences",
+          "[networks][pose]") {
+  const ModelConfig base = load_model_config("tiny");
+  const ModelConfig cfg = tiny_with("\"depth_map\": true", "tiny-depth");
+  REQUIRE(cfg.depth_map);
+  CHECK_FALSE(base.depth_map);
+  PoseNet deep(cfg), plain(base);
+  layers::ParamList pd, pp;
+  deep.params(pd);
+  plain.params(pp);
+  // The plain net's parameters first, one for one (its weights load into them), then the
+  // depth hourglasses: one per stage, shaped as a plane's.
+  REQUIRE(pd.size() > pp.size());
+  for (std::size_t i = 0; i < pp.size(); ++i) {
+    CHECK(pd[i].key == pp[i].key);
+    CHECK(pd[i].param->shape == pp[i].param->shape);
+  }
+  std::size_t xy0 = 0, depth0 = 0;
+  for (const auto& p : pp) xy0 += p.key.rfind("xy_hm_cnns.0.", 0) == 0;
+  for (std::size_t i = pp.size(); i < pd.size(); ++i) {
+    INFO(pd[i].key);
+    CHECK(pd[i].key.rfind("depth_hm_cnns.", 0) == 0);
+    depth0 += pd[i].key.rfind("depth_hm_cnns.0.", 0) == 0;
+  }
+  CHECK(depth0 == xy0);
+  CHECK(pd.size() - pp.size() == xy0 * std::size_t(cfg.stages));
+  // The same seed gives the shared parts the same weights: x and y are the plain net's, z is
+  // each joint's depth map averaged under its xy map.
+  deep.init(3);
+  plain.init(3);
+  deep.set_training(false);
+  plain.set_training(false);
+  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 5);
+  deep.forward(x.act, cfg.window);
+  plain.forward(x.act, cfg.window);
+  REQUIRE(plain.depth_map(0) == nullptr);
+  const int T = cfg.stages, J = cfg.joints;
+  const layers::Act& xy = deep.heatmap(T - 1, 0);
+  const layers::Act& dm = *deep.depth_map(T - 1);
+  CHECK(dm.c == J);
+  CHECK(dm.h == xy.h);
+  CHECK(dm.w == xy.w);
+  double zdiff = 0;
+  for (int n = 0; n < cfg.window; ++n)
+    for (int j = 0; j < J; ++j) {
+      const std::size_t k = (std::size_t(n) * J + j) * 3;
+      CHECK(deep.joints()[k] == plain.joints()[k]);
+      CHECK(deep.joints()[k + 1] == plain.joints()[k + 1]);
+      double z = 0;
+      for (std::size_t px = 0; px < xy.pixels(); ++px) z += double(*xy.lane(n, j, px)) * *dm.lane(n, j, px);
+      CHECK(deep.joints()[k + 2] == Approx(z).margin(1e-6));
+      zdiff += std::abs(deep.joints()[k + 2] - plain.joints()[k + 2]);
+    }
+  CHECK(zdiff > 1e-3);
+  std::vector<float> first(std::size_t(cfg.window) * J * 3);
+  deep.stage_joints(0, first.data());
+  CHECK(first[2] != deep.joints()[2]);  // every stage has its own depth maps
+  // Gradients through z reach the depth hourglasses and, under them, the xy hourglasses.
+  PoseNet net(cfg);
+  int depth_checked = 0;
+  CHECK(check_pose_gradients(net, cfg, 2, [&](const std::string& key, int layer) {
+    const bool pick = key.rfind("depth_hm_cnns.", 0) == 0 ? layer % 5 == 0 : layer % 23 == 0;
+    depth_checked += pick && key.rfind("depth_hm_cnns.", 0) == 0;
+    return pick;
+  }) >= 10);
+  CHECK(depth_checked >= 4);
 }
 
 TEST_CASE("pose net forward_cropped: features beyond the head's receptive field of the crop edge are the whole frame's", "[networks][pose]") {

@@ -127,7 +127,7 @@ double rel_error(const std::vector<float>& ours, const Array& ref) {
 
 }  // namespace
 
-TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, tiny at head_stride 4 and with hourglass_skip", "[parity]") {
+TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, tiny at head_stride 4, with hourglass_skip and depth_map", "[parity]") {
   require_torch();
   const auto dir = std::filesystem::temp_directory_path() / ("yelan-parity-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
@@ -157,6 +157,14 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, tin
     j["pose"]["hourglass_skip"] = true;
     std::ofstream(dir / "tiny-skip.json") << j.dump(2);
   }
+  // tiny with pose.depth_map: z from a fourth hourglass's depth maps under the xy maps
+  {
+    std::ifstream in(source_dir() + "/weights_tools/configs/tiny.json");
+    auto j = nlohmann::json::parse(in);
+    j["name"] = "tiny-depth";
+    j["pose"]["depth_map"] = true;
+    std::ofstream(dir / "tiny-depth.json") << j.dump(2);
+  }
   // the default's shapes with stage 1 on the input pooled 2 x 2 (130 x 173 -> 65 x 86 -> 130 x 173)
   {
     std::ifstream in(source_dir() + "/weights_tools/configs/small.json");
@@ -167,7 +175,7 @@ TEST_CASE("forward parity with PyTorch on the tiny, small and paper configs, tin
   }
   for (const std::string& name : std::vector<std::string>{"tiny", "small", (dir / "paper-w1.json").string(),
                                                           (dir / "tiny-s4.json").string(), (dir / "small-p2.json").string(),
-                                                          (dir / "tiny-skip.json").string()}) {
+                                                          (dir / "tiny-skip.json").string(), (dir / "tiny-depth.json").string()}) {
     const std::string stem = std::filesystem::path(name).stem().string();
     const std::string cs = (dir / (stem + ".h5")).string();
     const std::string cmd = "cd '" + source_dir() + "' && /usr/bin/python3 weights_tools/make_parity_case.py --config '" +
@@ -283,7 +291,7 @@ TEST_CASE("training-mode losses and every gradient match PyTorch (tiny config)",
     const MaskLoss ml = mask_loss(mask, labels.act, dmasks.act, dscores);
     mask.backward(x.act, dmasks.act, dscores.data());
     pose.forward(x.act, cfg.window);
-    std::vector<std::array<layers::Act, 3>> dheat;
+    std::vector<PoseNet::StageGrads> dheat;
     std::vector<layers::Floats> store;
     const HpeLoss hl = hpe_loss(pose, cfg.stages, target.data.data(), valid.data.data(), dheat, store);
     pose.backward(x.act, dheat, nullptr);
@@ -383,7 +391,7 @@ TEST_CASE("20 training steps from the same weights and batches give PyTorch's lo
 
     adam_pose.zero_grad();
     pose.forward(x.act, cfg.window);
-    std::vector<std::array<layers::Act, 3>> dheat;
+    std::vector<PoseNet::StageGrads> dheat;
     std::vector<layers::Floats> store;
     const double lp = hpe_loss(pose, cfg.stages, target.data.data(), valid.data.data(), dheat, store).total;
     pose.backward(x.act, dheat, nullptr);

@@ -83,6 +83,26 @@ TEST_CASE("train: the error split puts an image-plane miss in pixels and a depth
   CHECK(s.n[12] == 0);  // never valid: n/a, not 0
   CHECK(s.mean_image_px == Approx(3.0 / 12));
   CHECK(s.mean_depth_mm == Approx(400.0 / 12));
+  CHECK(s.depth_bias_mm[1] == Approx(400));
+  // The hips are where they should be: hip alignment leaves the shoulder's 400 mm.
+  CHECK(s.depth_root_mm[1] == Approx(400));
+  CHECK(s.n_root[12] == 0);
+  // The whole body 200 mm too near: every joint's depth is off, none after hip alignment.
+  Pose13 near = truth;
+  for (auto& p : near)
+    for (double& c : p) c *= 2800.0 / 3000.0;
+  ErrorSplit whole;
+  whole.add(near, truth, valid, Intrinsics{300, 300, 173, 130, 346, 260});
+  const ErrorSplitScores w = whole.scores();
+  CHECK(w.mean_depth_mm == Approx(200));
+  CHECK(w.depth_bias_mm[3] == Approx(-200));
+  CHECK(w.mean_depth_root_mm == Approx(0).margin(1e-9));
+  CHECK(w.mean_image_px == Approx(0).margin(1e-9));
+  valid[5] = 0;  // no hip centre: no hip-aligned depth
+  ErrorSplit no_hips;
+  no_hips.add(near, truth, valid, Intrinsics{300, 300, 173, 130, 346, 260});
+  CHECK(no_hips.scores().n_root[3] == 0);
+  CHECK(no_hips.scores().n[3] == 1);
 }
 
 TEST_CASE("train: a short run writes its log and checkpoints, and --resume continues bit-exactly", "[train][cli]") {
@@ -164,7 +184,8 @@ TEST_CASE("train: a short run writes its log and checkpoints, and --resume conti
   for (const char* key : {"\"mpjpe_mm\"", "\"pck150\"", "\"auc\"", "\"mpjpe_root_mm\"", "\"frames\": 4", "\"by_condition\"",
                           "\"lighting\"", "\"mask_iou\"", "\"floors\"", "\"constant\"", "\"mean_pose_at_hip\"",
                           "\"per_view_mean_pose_at_hip\"", "\"swap_share_by_view\"", "\"mask_iou_by_condition\"",
-                          "\"error_split\"", "\"mean_image_px\"", "\"scene\""})
+                          "\"error_split\"", "\"mean_image_px\"", "\"mean_depth_root_mm\"", "\"depth_bias_mm\"",
+                          "\"depth_root_mm\"", "\"scene\""})
     CHECK(yelan::test::contains(js, key));
   CHECK(yelan::test::contains(ev.out, ", IoU "));  // the mask IoU of each condition beside its MPJPE
   // A config without stage 1 has no mask IoU to report: n/a, not 0.

@@ -10,7 +10,8 @@ bool ends_with(const std::string& s, const std::string& tail) {
 }
 }  // namespace
 
-void load_group(const Weights& w, const std::string& group, layers::ParamList& params, const std::string& source) {
+std::size_t load_group(const Weights& w, const std::string& group, layers::ParamList& params, const std::string& source,
+                       const std::string& may_lack) {
   auto g = w.groups.find(group);
   if (g == w.groups.end()) throw WeightsError(source + ": no group /" + group);
   std::vector<std::string> missing, shape, extra;
@@ -19,6 +20,7 @@ void load_group(const Weights& w, const std::string& group, layers::ParamList& p
     ours.insert(p.key);
     auto it = g->second.find(p.key);
     if (it == g->second.end()) {
+      if (!may_lack.empty() && p.key.rfind(may_lack, 0) == 0) continue;
       missing.push_back(p.key);
     } else if (it->second.shape != p.param->shape) {
       shape.push_back(p.key + " is " + shape_text(it->second.shape) + ", the network needs " + shape_text(p.param->shape));
@@ -37,10 +39,16 @@ void load_group(const Weights& w, const std::string& group, layers::ParamList& p
     list("mis-shaped: ", shape);
     throw WeightsError(msg);
   }
+  std::size_t kept = 0;
   for (auto& p : params) {
-    const Tensor& t = g->second.at(p.key);
-    std::copy(t.data.begin(), t.data.end(), p.param->value.data());
+    const auto it = g->second.find(p.key);
+    if (it == g->second.end()) {
+      ++kept;
+      continue;
+    }
+    std::copy(it->second.data.begin(), it->second.data.end(), p.param->value.data());
   }
+  return kept;
 }
 
 std::map<std::string, Tensor> group_of(const layers::ParamList& params) {

@@ -16,8 +16,11 @@ namespace yelan::weights {
 
 // Throws WeightsError listing missing, unexpected and mis-shaped tensors (at most 20 each),
 // its message starting with `source` (the weights file's path, where the caller knows it).
-void load_group(const Weights& w, const std::string& group, layers::ParamList& params,
-                const std::string& source = "weights");
+// Tensors whose keys start with `may_lack` (non-empty) may be missing from the file: they
+// keep their values (a net grown by parts the file's net lacked, e.g. pose.depth_map's
+// hourglasses); returns how many did.
+std::size_t load_group(const Weights& w, const std::string& group, layers::ParamList& params,
+                       const std::string& source = "weights", const std::string& may_lack = "");
 std::map<std::string, Tensor> group_of(const layers::ParamList& params);
 // BN running statistics and affine parameters drawn away from their defaults (means
 // N(0, 0.1), variances U(0.5, 1.5), weights U(0.75, 1.25), biases U(-0.1, 0.1),

@@ -79,7 +79,7 @@ void bench_config(const ModelConfig& cfg, int frames, int threads, int reps, std
   layers::Floats dm(mask.masks().floats());
   const layers::Act dmasks{dm.data(), frames, cfg.n_masks, cfg.height(), cfg.width()};
   std::vector<float> dscores;
-  std::vector<std::array<layers::Act, 3>> dheat;
+  std::vector<PoseNet::StageGrads> dheat;
   std::vector<layers::Floats> store;
   auto train = [&] {
     mask.forward(x);

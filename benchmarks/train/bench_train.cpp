@@ -212,7 +212,7 @@ Row time_stage(const ModelConfig& cfg, const StageData& d, int steps, int thread
     adam.zero_grad();
     if (is_pose) {
       pose.forward(x, cfg.window);
-      std::vector<std::array<layers::Act, 3>> dheat;
+      std::vector<PoseNet::StageGrads> dheat;
       std::vector<layers::Floats> store;
       loss = hpe_loss(pose, cfg.stages, d.target[b].data(), d.valid[b].data(), dheat, store).total;
       pose.backward(x, dheat, nullptr);

@@ -137,6 +137,7 @@ DATA_STICK=${DATA_STICK:-/var/tmp/yelan-data/stick}
 DATA_SK_SRC=${DATA_SK_SRC:-/var/tmp/yelan-data/sk-src}
 DATA_SK=${DATA_SK:-/var/tmp/yelan-data/sk}
 DATA_SKS=${DATA_SKS:-/var/tmp/yelan-data/sks}
+DATA_SK_FP2=${DATA_SK_FP2:-/var/tmp/yelan-data/sk-src-fp2}
 STICK_CFG0=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json
 dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
@@ -546,6 +547,20 @@ case "$what" in
   # checkpoint) instead of a random init: does a net that reads sided sticks, limb by limb,
   # read the events those sticks were drawn from any better?
   train-ev-from-sided) sk_run ev-from-sided "$DATA_SK_SRC" --init "${EV_INIT:-models/campaign/sk-sided/checkpoint.h5}" ;;
+  # sk-src-fp2: sk-src's dancers, motions, views and looks with every front cue at scale 2
+  # (--front-print 2: the chest print over most of the chest, the brow band twice as tall);
+  # ev-fp2: ev-from-sided's recipe on it. Is a weak cue what keeps the sides from the events?
+  ev-data-fp2)
+    "$Y" sim --dataset "$DATA_SK_FP2" --seed 1 --train 160 --val 32 --test 0 --train-empty 0 --val-empty 0 --duration 5s \
+      --random-looks --frame-dancer --train-rooms 0 --val-rooms 0 --train-dancer-rooms 0 --val-dancer-rooms 24 \
+      --free-arms 0.5 --front-print 2 --threads "${THREADS:-2}" ;;
+  train-ev-fp2) sk_run ev-fp2 "$DATA_SK_FP2" --init "${EV_INIT:-models/campaign/sk-sided/checkpoint.h5}" ;;
+  # sk-depth: sk-sided's recipe (sided sticks, random init, 1500 steps) with pose.depth_map:
+  # does z read off a depth map under each joint's xy map learn the depth the marginals do
+  # not (sk-sided: 96.8 mm a joint after aligning the hips' depths, the per-view floor 104.0)?
+  # sk-sided-r: sk-sided's first 1500 steps again, the control scored the same way.
+  train-sk-depth) STICK_CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-depth.json sk_run sk-depth "$DATA_SKS" ;;
+  train-sk-sided-r) sk_run sk-sided-r "$DATA_SKS" ;;
   # pose-s24-free's recipe exactly (1000 steps on ds-s9 behind the default's stage 1 and its
   # reused masks, lr 3e-4, from pose-s21-reuse), with pose.hourglass_skip.
   train-pose-s26-skip)

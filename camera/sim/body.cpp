@@ -472,17 +472,23 @@ void Dresser::primitives(std::vector<Primitive>& out) const {
 
   // What tells a front from a back in events: a dark band across the eyes and brows, and a
   // print on the front of the top in a shade far from the top's own. Added last so the
-  // other parts keep their print seeds.
+  // other parts keep their print seeds. front_print scales both across and down (0: none):
+  // at 2 the print covers most of the chest, as a contrasting shirt under an open jacket.
+  const double cue = ch.front_print;
+  if (!(cue > 0)) return;
   Material brows;
   brows.albedo = brows.albedo2 = 0.04f;
-  ellipsoid(p[kHead] + head_.fwd * (0.85 * d.head_depth) + head_.up * (0.18 * head_up_), head_, 0.72 * d.head_side,
-            0.25 * d.head_depth, 0.14 * head_up_, brows, p[kHead]);
+  ellipsoid(p[kHead] + head_.fwd * (0.85 * d.head_depth) + head_.up * (0.18 * head_up_), head_,
+            std::min(0.72 * cue, 0.95) * d.head_side, 0.25 * d.head_depth, 0.14 * cue * head_up_, brows, p[kHead]);
   Material front = torso_m;
   front.pattern = Pattern::plain;
   front.albedo = front.albedo2 = torso_m.albedo < 0.35f ? 0.85f : 0.04f;
-  ellipsoid(p[kChest] + 0.5 * (p[kNeck] - p[kChest]) + torso_.fwd * (0.8 * torso_scale * d.chest_depth), torso_,
-            0.5 * torso_scale * d.chest_lat_per_shoulder * shoulder_width, 0.3 * d.chest_depth, 0.4 * spine_upper, front,
-            p[kPelvis]);
+  // The print's top edge stays below the collar; a bigger print grows down the chest.
+  const double print_up = std::min(0.4 * cue, 0.62) * spine_upper;
+  ellipsoid(p[kChest] + 0.5 * (p[kNeck] - p[kChest]) - torso_.up * (print_up - 0.4 * spine_upper) +
+                torso_.fwd * (0.8 * torso_scale * d.chest_depth),
+            torso_, std::min(0.5 * cue, 0.9) * torso_scale * d.chest_lat_per_shoulder * shoulder_width,
+            0.3 * d.chest_depth, print_up, front, p[kPelvis]);
 }
 
 }  // namespace yelan::camera::sim

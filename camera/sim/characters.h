@@ -39,6 +39,8 @@ struct Character {
   // around them: vertical stripes flicker under turns, hoops under bobbing and swinging.
   bool stripes_along = false;
   bool test_only = false;  // held out from training data
+  // Scale of the front cues (brow band, chest print; body.cpp): 1 as drawn, 0 none, up to 3.
+  double front_print = 1;
 };
 
 // Every character, training ones first; the list never changes at run time.

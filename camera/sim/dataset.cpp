@@ -225,6 +225,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   const double low_dn = d.low_light_dn ? *d.low_light_dn : lighting(LightLevel::low, false).level;
   if (!(d.remix_arms >= 0 && d.remix_arms <= 1)) throw std::invalid_argument("dataset: the share of remixed arms must be in 0..1");
   if (!(d.free_arms >= 0 && d.free_arms <= 1)) throw std::invalid_argument("dataset: the share of free arms must be in 0..1");
+  if (!(d.front_print >= 0 && d.front_print <= 3)) throw std::invalid_argument("dataset: the front print's scale must be in 0..3");
   if (const fs::path old = fs::path(d.out_dir) / "manifest.json"; fs::exists(old)) {
     std::ifstream in(old);
     nlohmann::json m;
@@ -242,17 +243,19 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
           << low_dn << ": give --low-light-dn " << was << " to add to it, or another folder";
       throw std::invalid_argument(msg.str());
     }
-    // The same for the remixed and free arms (manifests from before a key had none).
     struct Share {
       const char *key, *flag;
-      double asked;
+      double asked, absent;
     };
-    for (const Share& sh : {Share{"remix_arms", "--remix-arms", d.remix_arms}, Share{"free_arms", "--free-arms", d.free_arms}}) {
-      const double was_drawn = m.is_object() && m.contains(sh.key) && m[sh.key].is_number() ? m[sh.key].get<double>() : 0.0;
+    // The same for the remixed and free arms and the front cues (manifests from before a key
+    // were drawn at its default).
+    for (const Share& sh : {Share{"remix_arms", "--remix-arms", d.remix_arms, 0.0}, Share{"free_arms", "--free-arms", d.free_arms, 0.0},
+                            Share{"front_print", "--front-print", d.front_print, 1.0}}) {
+      const double was_drawn = m.is_object() && m.contains(sh.key) && m[sh.key].is_number() ? m[sh.key].get<double>() : sh.absent;
       if (was_drawn != sh.asked) {
         std::ostringstream msg;
         msg << "dataset " << d.out_dir << " was drawn with " << sh.flag << " " << was_drawn << " (its manifest), this run asks "
-            << sh.asked << ": give the manifest's share to add to it, or another folder";
+            << sh.asked << ": give the manifest's value to add to it, or another folder";
         throw std::invalid_argument(msg.str());
       }
     }
@@ -272,6 +275,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"low_light_dn", low_dn},
                                      {"remix_arms", d.remix_arms},
                                      {"free_arms", d.free_arms},
+                                     {"front_print", d.front_print},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"room_counts", {{"train", d.train_rooms}, {"val", d.val_rooms}, {"test", d.test_rooms}}},
@@ -318,7 +322,10 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
       jobs.push_back(j);
     }
   }
-  for (Job& j : jobs) set_low_light_dn(j.spec.scene, d.low_light_dn);
+  for (Job& j : jobs) {
+    set_low_light_dn(j.spec.scene, d.low_light_dn);
+    j.spec.front_print = d.front_print;
+  }
   // Temporary files of a run that was killed (name.tmp-PID-XXXXXX, its process gone) are removed:
   // their recordings are simulated again.
   for (const char* split : {"train", "val", "test"}) {

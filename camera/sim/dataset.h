@@ -57,6 +57,10 @@ struct DatasetSpec {
   // ...-free): arm poses no clip has, on the clips' bodies. Own stream, as remix_arms; a
   // member drawn for both is remixed, not freed. Validation and test are never touched.
   double free_arms = 0;
+  // Scale of every dancer's front cues (SimSpec::front_print; 1 as drawn, 0 none, up to 3):
+  // how strongly the events tell a dancer's front from the back. Not in the files' names:
+  // a dataset is only added to at the scale its manifest names.
+  double front_print = 1;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };

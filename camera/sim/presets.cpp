@@ -101,7 +101,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
   static const std::vector<std::string> known = {
       "preset", "name", "character", "motion", "speed", "mirror", "yaw_offset_deg", "static_legs", "view", "yaw_deg",
       "pitch_deg", "distance_mm", "height_mm", "focal_px", "lighting", "light_dn", "flicker", "background", "occluders", "clutter", "camera_motion",
-      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir", "looks_seed", "arm_offset_s", "free_arms_seed"};
+      "duration_s", "seed", "label_hz", "mask_hz", "max_step_s", "min_step_s", "step_lambda", "max_render_step_s", "render_lambda", "pixel", "mocap_dir", "looks_seed", "arm_offset_s", "free_arms_seed", "front_print"};
   for (auto& [key, value] : j.items())
     if (std::find(known.begin(), known.end(), key) == known.end())
       throw std::invalid_argument(what + ": unknown key '" + key + "'");
@@ -148,6 +148,7 @@ SimSpec spec_from_json(const std::string& text, const std::string& what) {
     if (j.contains("seed")) s.seed = j.at("seed").get<std::uint64_t>();
     if (j.contains("looks_seed")) s.looks_seed = j.at("looks_seed").get<std::uint64_t>();
     if (j.contains("free_arms_seed")) s.free_arms_seed = j.at("free_arms_seed").get<std::uint64_t>();
+    num(j, "front_print", s.front_print);
     num(j, "label_hz", s.label_hz);
     num(j, "mask_hz", s.mask_hz);
     num(j, "max_step_s", s.max_step_s);

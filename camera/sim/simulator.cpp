@@ -67,11 +67,13 @@ class FramedMotion final : public Motion {
 Character varied_character(const SimSpec& spec) {
   if (!(spec.height_scale >= 0.7 && spec.height_scale <= 1.3) || !(spec.girth_scale >= 0.6 && spec.girth_scale <= 1.6))
     throw std::invalid_argument("height scale must be in [0.7, 1.3] and girth scale in [0.6, 1.6]");
+  if (!(spec.front_print >= 0 && spec.front_print <= 3)) throw std::invalid_argument("front print must be in [0, 3]");
   Character c = character_by_name(spec.character);
   if (spec.looks_seed) c = random_looks(c, spec.looks_seed);
   c.shape.height_mm *= spec.height_scale;
   c.shape.girth *= spec.girth_scale;
   if (spec.clothing) c.clothing = *spec.clothing;
+  c.front_print = spec.front_print;
   return c;
 }
 
@@ -327,6 +329,7 @@ std::string Simulator::description_json() const {
   if (sc.clutter) j["clutter"] = true;
   if (spec_.arm_offset_s[0] != 0 || spec_.arm_offset_s[1] != 0) j["arm_offset_s"] = spec_.arm_offset_s;
   if (spec_.free_arms_seed != 0) j["free_arms_seed"] = spec_.free_arms_seed;
+  if (spec_.front_print != 1) j["front_print"] = spec_.front_print;
   return j.dump();
 }
 

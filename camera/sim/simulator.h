@@ -60,6 +60,8 @@ struct SimSpec {
   // anywhere in their range (free_arms.h), hung from the body's shoulders: arm poses no clip
   // has. Datasets draw it for some training recordings (--free-arms). Not with arm_offset_s.
   std::uint64_t free_arms_seed = 0;
+  // Scale of the character's front cues (Character::front_print): datasets set it for all.
+  double front_print = 1;
   SceneConfig scene;
   PixelParams pixel = pixel_params_davis346();
   double duration_s = 2;

@@ -180,6 +180,7 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   if (a.value("--low-light-dn")) d.low_light_dn = a.number_or("--low-light-dn", 20, 1e-3, 1e5);
   d.remix_arms = a.number_or("--remix-arms", 0, 0, 1);
   d.free_arms = a.number_or("--free-arms", 0, 0, 1);
+  d.front_print = a.number_or("--front-print", 1, 0, 3);
   d.threads = a.int_value_or("--threads", 0, 0, 256);
   d.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   try {
@@ -221,6 +222,7 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
                {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
                 "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes",
                 "--dataset", "--train", "--val", "--test", "--train-empty", "--val-empty", "--test-empty", "--low-light-dn", "--remix-arms", "--free-arms",
+                "--front-print",
                 "--train-rooms", "--val-rooms", "--test-rooms", "--train-dancer-rooms", "--val-dancer-rooms",
                 "--test-dancer-rooms"},
                {"--list", "--quiet", "--force", "--random-looks", "--frame-dancer"});

@@ -215,15 +215,20 @@ nlohmann::ordered_json scores_json(const PoseScores& s) {
 }
 using camera::sim::kJointNames;
 
-// image_px and depth_mm per joint (null: never visible) and their means over joints seen.
+// image_px, depth_mm, depth_bias_mm and depth_root_mm per joint (null: never visible) and
+// the means over joints seen.
 nlohmann::ordered_json split_json(const ErrorSplitScores& s) {
-  nlohmann::ordered_json px, dz;
+  nlohmann::ordered_json px, dz, bias, root;
+  const auto value = [](bool seen, double v) { return seen ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); };
   for (int i = 0; i < kJoints; ++i) {
     const bool seen = s.n[std::size_t(i)] > 0;
-    px[kJointNames[i]] = seen ? nlohmann::ordered_json(s.image_px[std::size_t(i)]) : nlohmann::ordered_json(nullptr);
-    dz[kJointNames[i]] = seen ? nlohmann::ordered_json(s.depth_mm[std::size_t(i)]) : nlohmann::ordered_json(nullptr);
+    px[kJointNames[i]] = value(seen, s.image_px[std::size_t(i)]);
+    dz[kJointNames[i]] = value(seen, s.depth_mm[std::size_t(i)]);
+    bias[kJointNames[i]] = value(seen, s.depth_bias_mm[std::size_t(i)]);
+    root[kJointNames[i]] = value(s.n_root[std::size_t(i)] > 0, s.depth_root_mm[std::size_t(i)]);
   }
-  return {{"mean_image_px", s.mean_image_px}, {"mean_depth_mm", s.mean_depth_mm}, {"image_px", px}, {"depth_mm", dz}};
+  return {{"mean_image_px", s.mean_image_px}, {"mean_depth_mm", s.mean_depth_mm}, {"mean_depth_root_mm", s.mean_depth_root_mm},
+          {"image_px", px}, {"depth_mm", dz}, {"depth_bias_mm", bias}, {"depth_root_mm", root}};
 }
 
 void split_row(std::ostream& o, const char* who, const ErrorSplitScores& s) {
@@ -232,6 +237,17 @@ void split_row(std::ostream& o, const char* who, const ErrorSplitScores& s) {
     o << " " << kJointNames[i] << " ";
     if (s.n[std::size_t(i)]) o << s.image_px[std::size_t(i)] << "/" << s.depth_mm[std::size_t(i)];
     else o << "n/a";
+  }
+  o << "\n  " << who << ", depth hip-aligned / signed bias (mm): mean " << s.mean_depth_root_mm << ";";
+  for (int i = 0; i < kJoints; ++i) {
+    o << " " << kJointNames[i] << " ";
+    if (s.n[std::size_t(i)]) {
+      if (s.n_root[std::size_t(i)]) o << s.depth_root_mm[std::size_t(i)];
+      else o << "n/a";
+      o << "/" << std::showpos << s.depth_bias_mm[std::size_t(i)] << std::noshowpos;
+    } else {
+      o << "n/a";
+    }
   }
   o << "\n";
 }

@@ -80,6 +80,8 @@ void ErrorSplit::add(const Pose13& pred, const Pose13& truth, const std::array<s
   const auto project = [&](const std::array<double, 3>& p) {
     return std::array<double, 2>{k.fx * p[0] / p[2] + k.cx, k.fy * p[1] / p[2] + k.cy};
   };
+  const bool hips = valid[5] && valid[6];
+  const double hip_shift = hips ? 0.5 * (pred[5][2] + pred[6][2] - truth[5][2] - truth[6][2]) : 0.0;
   for (int j = 0; j < kJoints; ++j) {
     const auto& a = pred[std::size_t(j)];
     const auto& b = truth[std::size_t(j)];
@@ -88,19 +90,29 @@ void ErrorSplit::add(const Pose13& pred, const Pose13& truth, const std::array<s
     const auto pa = project(a), pb = project(b);
     px_[std::size_t(j)] += std::hypot(pa[0] - pb[0], pa[1] - pb[1]);
     dz_[std::size_t(j)] += std::abs(a[2] - b[2]);
+    dz_signed_[std::size_t(j)] += a[2] - b[2];
     ++n_[std::size_t(j)];
+    if (hips) {
+      dz_root_[std::size_t(j)] += std::abs(a[2] - b[2] - hip_shift);
+      ++n_root_[std::size_t(j)];
+    }
   }
 }
 
 ErrorSplitScores ErrorSplit::scores() const {
   ErrorSplitScores s;
-  double px = 0, dz = 0;
-  std::uint64_t n = 0;
+  double px = 0, dz = 0, dz_root = 0;
+  std::uint64_t n = 0, n_root = 0;
   for (std::size_t j = 0; j < std::size_t(kJoints); ++j) {
     s.n[j] = n_[j];
+    s.n_root[j] = n_root_[j];
+    if (n_root_[j]) s.depth_root_mm[j] = dz_root_[j] / double(n_root_[j]);
+    dz_root += dz_root_[j];
+    n_root += n_root_[j];
     if (n_[j] == 0) continue;
     s.image_px[j] = px_[j] / double(n_[j]);
     s.depth_mm[j] = dz_[j] / double(n_[j]);
+    s.depth_bias_mm[j] = dz_signed_[j] / double(n_[j]);
     px += px_[j];
     dz += dz_[j];
     n += n_[j];
@@ -109,6 +121,7 @@ ErrorSplitScores ErrorSplit::scores() const {
     s.mean_image_px = px / double(n);
     s.mean_depth_mm = dz / double(n);
   }
+  if (n_root) s.mean_depth_root_mm = dz_root / double(n_root);
   return s;
 }
 

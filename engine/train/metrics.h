@@ -7,7 +7,6 @@
 #include <cstdint>
 #include <map>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "engine/joints.h"
@@ -50,11 +49,14 @@ class PoseMetrics {
 // Where the error lies: per joint, the distance in the image (sensor pixels, both poses
 // projected with the camera's intrinsics) and along the optical axis (|dz|, mm). A net that
 // places joints well in the image but not in depth needs depth cues; one that misses in the
-// image does not see the limbs.
+// image does not see the limbs. Depth also signed (depth_bias_mm: mean of predicted minus true
+// z; a net whose depths shrink towards the head's shows it) and after aligning the hip
+// centres' depths (depth_root_mm; frames with both hips valid): a body placed at the wrong
+// depth as a whole is told apart from limbs at the wrong depth within it.
 struct ErrorSplitScores {
-  std::array<double, kJoints> image_px{}, depth_mm{};
-  std::array<std::uint64_t, kJoints> n{};
-  double mean_image_px = 0, mean_depth_mm = 0;
+  std::array<double, kJoints> image_px{}, depth_mm{}, depth_bias_mm{}, depth_root_mm{};
+  std::array<std::uint64_t, kJoints> n{}, n_root{};
+  double mean_image_px = 0, mean_depth_mm = 0, mean_depth_root_mm = 0;
 };
 
 class ErrorSplit {
@@ -64,8 +66,8 @@ class ErrorSplit {
   ErrorSplitScores scores() const;
 
  private:
-  std::array<double, kJoints> px_{}, dz_{};
-  std::array<std::uint64_t, kJoints> n_{};
+  std::array<double, kJoints> px_{}, dz_{}, dz_signed_{}, dz_root_{};
+  std::array<std::uint64_t, kJoints> n_{}, n_root_{};
 };
 
 // The 30 AUC thresholds: 0, 500/29, ..., 500 mm.

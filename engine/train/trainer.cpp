@@ -316,7 +316,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       weights::load_group(w, "mask", mp, spec.init_weights);
       mask_loaded = true;
     }
-    if (pose_stage || has("pose")) weights::load_group(w, "pose", pp, spec.init_weights);
+    // A net with depth maps may start from one without: its depth hourglasses keep their init.
+    if (pose_stage || has("pose"))
+      if (const std::size_t fresh = weights::load_group(w, "pose", pp, spec.init_weights, cfg.depth_map ? "depth_hm_cnns." : "")) {
+        err << "note: " << spec.init_weights << " has no depth maps (pose.depth_map): " << fresh
+            << " tensors of the depth hourglasses start from their init\n";
+      }
   }
   if (pose_stage && cfg.masked_input && spec.mask_weights.empty() && !mask_loaded)
     err << "note: the pose net learns from the simulator's true masks; the mask group of the files written here is "
@@ -462,7 +467,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       const int nw = b.frames / cfg.window;
       if (pose_stage) {
         pose.forward(b.input.act, cfg.window);
-        std::vector<std::array<layers::Act, 3>> dheat;
+        std::vector<PoseNet::StageGrads> dheat;
         std::vector<layers::Floats> store;
         sum += hpe_loss(pose, cfg.stages, b.target.data(), b.valid.data(), dheat, store, swap_group).total * nw;
         const std::vector<float>& jn = pose.joints();
@@ -534,7 +539,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
     if (pose_stage) {
       pose.forward(batch.input.act, cfg.window);
-      std::vector<std::array<layers::Act, 3>> dheat;
+      std::vector<PoseNet::StageGrads> dheat;
       std::vector<layers::Floats> store;
       const HpeLoss l = hpe_loss(pose, cfg.stages, batch.target.data(), batch.valid.data(), dheat, store, swap_group);
       loss = l.total;

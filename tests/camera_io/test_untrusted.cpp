@@ -244,8 +244,7 @@ TEST_CASE("the real DAVIS recording converted to ours, two known libhdf5 crashes
 }
 
 TEST_CASE("vetting in a child: a read past the memory budget is an error, the budget on top of the caller's own", "[io][h5][untrusted]") {
-  const bool asan = test::kSanitized;
-  if (asan) {  // untrusted.cpp sets no RLIMIT_AS under ASan (it reserves terabytes of address space)
+  if (test::kSanitized) {  // untrusted.cpp sets no RLIMIT_AS under ASan (it reserves terabytes of address space)
     std::printf("SKIP: no address-space limit under AddressSanitizer\n");
     std::exit(77);
   }

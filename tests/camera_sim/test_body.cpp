@@ -483,3 +483,25 @@ TEST_CASE("body front cues: a dark brow band on the face and a contrasting print
     CHECK(std::abs(print.material.albedo - c.top.albedo) > 0.3f);
   }
 }
+
+TEST_CASE("body front cues scale with front_print: 0 drops both, 2 grows the print down the chest") {
+  Character c = character_by_name("ana");
+  const BodyPose pose = standing_pose(c.shape.height_mm, c.shape.female);
+  const auto one = dress_at_rest(c, pose);
+  c.front_print = 0;
+  const auto none = dress_at_rest(c, pose);
+  REQUIRE(none.size() + 2 == one.size());
+  for (std::size_t i = 0; i < none.size(); ++i) CHECK(none[i].a == one[i].a);
+  c.front_print = 2;
+  const auto two = dress_at_rest(c, pose);
+  REQUIRE(two.size() == one.size());
+  const Primitive &p1 = one.back(), &p2 = two.back();
+  const double lat1 = p1.axes.col(0).norm(), up1 = p1.axes.col(2).norm();
+  const double lat2 = p2.axes.col(0).norm(), up2 = p2.axes.col(2).norm();
+  CHECK(lat2 == Approx(1.8 * lat1));
+  CHECK(up2 == Approx(1.55 * up1));
+  // Its top edge stays where it was (below the collar); it still sits in front of the chest.
+  CHECK((p2.a + p2.axes.col(2) - (p1.a + p1.axes.col(2))).norm() < 1e-6);
+  CHECK(p2.a.y() < pose.p[kChest].y() - 40);
+  CHECK(two[two.size() - 2].axes.col(2).norm() == Approx(2 * one[one.size() - 2].axes.col(2).norm()));
+}

@@ -121,6 +121,13 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   d.free_arms = 0.25;
   CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--free-arms 0"));
   d.free_arms = 0;
+  // Nor at another scale of the front cues.
+  CHECK((text.str().find("\"front_print\": 1,") != std::string::npos || text.str().find("\"front_print\": 1.0,") != std::string::npos));
+  d.front_print = 2;
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--front-print 1"));
+  d.front_print = 5;
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("0..3"));
+  d.front_print = 1;
   // Low light is not in the names: adding at another level than the manifest's is refused.
   d.low_light_dn = 4;
   CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--low-light-dn 20"));

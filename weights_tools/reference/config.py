@@ -41,6 +41,7 @@ class ModelConfig:
     crop_margin: int = 0           # inference only (C++ PoseNet::forward_cropped); 0: whole frame
     head_stride: int = 8           # the ResNet head's stride: 8, or 4 (layer2 keeps layer1's resolution)
     hourglass_skip: bool = False   # each hourglass adds its second block's output to its up block's
+    depth_map: bool = False        # a fourth hourglass per stage: depth maps read under the xy maps give z
     representation: str = "tore"   # or "counts": log(1 + events) per polarity per frame period
     mask_pool: int = 1             # stage 1 on the input avg-pooled k x k, its logits resized back bilinearly              # the JSON object this was read from
 
@@ -116,6 +117,7 @@ def config_from_dict(d, where="config"):
         crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
         head_stride=_get(p, where + ".pose", "head_stride", int, 8),
         hourglass_skip=_get_bool(p, where + ".pose", "hourglass_skip", False),
+        depth_map=_get_bool(p, where + ".pose", "depth_map", False),
         representation=_get(i, where + ".input", "representation", str, "tore"),
         mask_pool=_get(m, where + ".mask", "pool", int, 1),
         mask_role=_get(m, where + ".mask", "role", str,

@@ -17,9 +17,13 @@ def dsnt(heatmaps):
     return torch.stack([x, y], dim=-1)
 
 
-def joints_from_heatmaps(xy, zy, xz):
+def joints_from_heatmaps(xy, zy, xz, depth=None):
     """Normalised 3D joints (N, J, 3): x, y from xy; z = mean of zy's width coordinate and
-    xz's height coordinate."""
-    pxy, pzy, pxz = dsnt(xy), dsnt(zy), dsnt(xz)
-    z = 0.5 * (pzy[..., 0:1] + pxz[..., 1:2])
+    xz's height coordinate, or with depth maps (pose.depth_map) their mean under xy."""
+    pxy = dsnt(xy)
+    if depth is not None:
+        z = (xy * depth).sum(dim=(-2, -1)).unsqueeze(-1)
+    else:
+        pzy, pxz = dsnt(zy), dsnt(xz)
+        z = 0.5 * (pzy[..., 0:1] + pxz[..., 1:2])
     return torch.cat([pxy, z], dim=-1)

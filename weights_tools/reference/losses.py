@@ -39,12 +39,13 @@ def masked_mean(losses, valid):
 
 
 def hpe_loss(heatmaps, target, valid):
-    """heatmaps: list over stages of (xy, zy, xz) maps (N, J, h, w); target (N, J, 3);
+    """heatmaps: list over stages of (xy, zy, xz[, depth]) maps (N, J, h, w); target (N, J, 3);
     valid (N, J) float. -> (loss, [per-stage losses])."""
     per_stage = []
-    for xy, zy, xz in heatmaps:
+    for maps in heatmaps:
+        xy, zy, xz = maps[:3]
         h, w = xy.shape[-2:]
-        joints = joints_from_heatmaps(xy, zy, xz)
+        joints = joints_from_heatmaps(*maps)
         e = torch.linalg.norm(joints - target, dim=-1)
         x, y, z = target[..., 0:1], target[..., 1:2], target[..., 2:3]
         e = e + js(xy, gaussian(torch.cat([x, y], -1), h, w))

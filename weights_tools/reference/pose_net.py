@@ -125,11 +125,16 @@ class PoseNet(nn.Module):
                 self.hm_combiners.append(HeatmapCombiner(cfg.joints, mid))
             for plane in (self.xy_hm_cnns, self.zy_hm_cnns, self.xz_hm_cnns):
                 plane.append(HourglassStage(mid, cfg.joints, lo, hi, self.mid_hw, cfg.hourglass_skip))
+        if cfg.depth_map:  # pose.depth_map: one more hourglass per stage, its output depth maps
+            self.depth_hm_cnns = nn.ModuleList(
+                HourglassStage(mid, cfg.joints, lo, hi, self.mid_hw, cfg.hourglass_skip)
+                for _ in range(cfg.stages))
 
     def forward(self, x):
         """x (S, C, H, W) or (B, S, C, H, W): one or B windows.
         Returns (heatmaps, joints): heatmaps[t] = (xy, zy, xz), each (B*S, J, h, w)
-        probability maps of stage t; joints (B*S, J, 3) normalised, from the last stage."""
+        probability maps of stage t, followed by its depth maps with pose.depth_map; joints
+        (B*S, J, 3) normalised, from the last stage."""
         if x.dim() == 4:
             x = x.unsqueeze(0)
         b, s = x.shape[:2]
@@ -143,8 +148,10 @@ class PoseNet(nn.Module):
         for t in range(self.cfg.stages):
             if t > 0:
                 # Cumulative, as the reference: stage t sees feats + sum of combiners 1..t.
-                inp = inp + self.hm_combiners[t - 1](torch.cat(heatmaps[t - 1], dim=1))
-            heatmaps.append(tuple(flat_softmax(plane[t](inp))
-                                  for plane in (self.xy_hm_cnns, self.zy_hm_cnns,
-                                                self.xz_hm_cnns)))
+                inp = inp + self.hm_combiners[t - 1](torch.cat(heatmaps[t - 1][:3], dim=1))
+            maps = tuple(flat_softmax(plane[t](inp))
+                         for plane in (self.xy_hm_cnns, self.zy_hm_cnns, self.xz_hm_cnns))
+            if self.cfg.depth_map:
+                maps = maps + (self.depth_hm_cnns[t](inp),)
+            heatmaps.append(maps)
         return heatmaps, joints_from_heatmaps(*heatmaps[-1])
