@@ -6,7 +6,11 @@ per-view mean pose (the floor `yelan eval` reports as depth hip-aligned). The tr
 its input, so this bounds what a lifter on good 2D joints could do; the event nets' stage 2
 (2026-12-01: 96.8 mm on sided sticks, 102.3 on events, floor 104) is far from it if it is low.
 
-    /usr/bin/python3 lift_probe.py TRAIN_DIR VAL_DIR [--every 5] [--epochs 30] [--seed 1]
+    /usr/bin/python3 lift_probe.py TRAIN_DIR VAL_DIR [--every 5] [--epochs 30] [--seed 1] [--noise-px S]
+
+--noise-px S: Gaussian noise of S sensor pixels (per axis) on every joint's image position,
+in training (drawn afresh each batch) and validation (drawn once): what a lifter would get
+behind a net whose 2D joints are that far off (the event nets': 15 px mean distance).
 """
 import argparse
 import glob
@@ -25,12 +29,13 @@ def view_of(path):
 
 
 def load(folder, every):
-    """-> (inputs N x 26, depth targets N x 13 in mm, views N): frames whose joints are all
-    valid and in front of the camera, every `every`-th label."""
-    xs, zs, vs = [], [], []
+    """-> (inputs N x 26, depth targets N x 13 in mm, views N, mm per pixel at the hips N):
+    frames whose joints are all valid and in front of the camera, every `every`-th label."""
+    xs, zs, vs, mm = [], [], [], []
     for path in sorted(glob.glob(os.path.join(folder, "*.yelan.h5"))):
         with h5py.File(path, "r") as f:
             j = f["labels/joints"][::every].astype(np.float64)
+            fx = float(f["camera/K"][0, 0])
             ok = f["labels/valid"][::every].all(axis=1) & (j[..., 2] > 100).all(axis=1)
         j = j[ok]
         if not len(j):
@@ -42,7 +47,8 @@ def load(folder, every):
         xs.append(xy.reshape(len(j), 26))
         zs.append(j[..., 2] - hip[:, None, 2])
         vs += [view_of(path)] * len(j)
-    return np.concatenate(xs), np.concatenate(zs), np.array(vs)
+        mm.append(hip[:, 2] / fx)
+    return np.concatenate(xs), np.concatenate(zs), np.array(vs), np.concatenate(mm)
 
 
 def main(argv):
@@ -52,13 +58,16 @@ def main(argv):
     a.add_argument("--every", type=int, default=5)
     a.add_argument("--epochs", type=int, default=30)
     a.add_argument("--seed", type=int, default=1)
+    a.add_argument("--noise-px", type=float, default=0.0)
     o = a.parse_args(argv)
     import torch
     torch.set_num_threads(1)
     torch.manual_seed(o.seed)
-    xt, zt, vt = load(o.train, o.every)
-    xv, zv, vv = load(o.val, o.every)
-    print(f"train {len(xt)} frames, val {len(xv)} frames (every {o.every}th label)")
+    xt, zt, vt, mt = load(o.train, o.every)
+    xv, zv, vv, mv = load(o.val, o.every)
+    print(f"train {len(xt)} frames, val {len(xv)} frames (every {o.every}th label), 2D noise {o.noise_px} px")
+    rng = np.random.default_rng(o.seed)
+    xv = xv + rng.normal(0, 1, xv.shape) * o.noise_px * mv[:, None]
     floor = np.zeros_like(zv)
     for v in VIEWS:
         if (vv == v).any():
@@ -69,6 +78,7 @@ def main(argv):
                               torch.nn.Linear(512, 512), torch.nn.ReLU(), torch.nn.Dropout(0.1),
                               torch.nn.Linear(512, 13))
     X, Z = torch.tensor(xt / 1000, dtype=torch.float32), torch.tensor(zt / 1000, dtype=torch.float32)
+    M = torch.tensor(mt[:, None] * o.noise_px / 1000, dtype=torch.float32)
     Xv = torch.tensor(xv / 1000, dtype=torch.float32)
     opt = torch.optim.Adam(net.parameters(), 1e-3)
     sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, o.epochs)
@@ -77,7 +87,7 @@ def main(argv):
         perm = torch.randperm(len(X))
         for i in range(0, len(X), 256):
             b = perm[i:i + 256]
-            loss = (net(X[b]) - Z[b]).abs().mean()
+            loss = (net(X[b] + torch.randn(len(b), 26) * M[b]) - Z[b]).abs().mean()
             opt.zero_grad()
             loss.backward()
             opt.step()
