@@ -36,6 +36,13 @@ Scored score(MaskNet& net, const test::Owned& x, const test::Owned& labels, int 
   return s;
 }
 
+// The tiny config with pose.depth_map.
+ModelConfig tiny_depth() {
+  std::string text = load_model_config("tiny").json;
+  text.insert(text.find("\"convlstm\""), "\"depth_map\": true, ");
+  return parse_model_config(text, "tiny-depth");
+}
+
 }  // namespace
 
 TEST_CASE("mask loss: sample weights give the weighted mean of each sample's own loss", "[train][losses]") {
@@ -233,10 +240,7 @@ TEST_CASE("pose loss: --swap-loss scores each window against its joints or the m
 }
 
 TEST_CASE("pose loss with pose.depth_map: z from the depth maps, the loss's gradient by finite differences", "[train][losses]") {
-  const ModelConfig base = load_model_config("tiny");
-  std::string text = base.json;
-  text.insert(text.find("\"convlstm\""), "\"depth_map\": true, ");
-  const ModelConfig cfg = parse_model_config(text, "tiny-depth");
+  const ModelConfig cfg = tiny_depth();
   PoseNet net(cfg);
   net.init(7);
   net.set_training(false);  // fixed BN statistics: the loss is a function of each weight alone
@@ -290,9 +294,7 @@ TEST_CASE("pose loss with pose.depth_map: z from the depth maps, the loss's grad
 
 TEST_CASE("a plain pose net's weights start one with pose.depth_map (yelan train --init)", "[train][losses]") {
   const ModelConfig base = load_model_config("tiny");
-  std::string text = base.json;
-  text.insert(text.find("\"convlstm\""), "\"depth_map\": true, ");
-  const ModelConfig cfg = parse_model_config(text, "tiny-depth");
+  const ModelConfig cfg = tiny_depth();
   PoseNet deep(cfg), plain(base);
   layers::ParamList pd, pp;
   deep.params(pd);

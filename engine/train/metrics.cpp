@@ -81,7 +81,7 @@ void ErrorSplit::add(const Pose13& pred, const Pose13& truth, const std::array<s
     return std::array<double, 2>{k.fx * p[0] / p[2] + k.cx, k.fy * p[1] / p[2] + k.cy};
   };
   const bool hips = valid[5] && valid[6];
-  const double hip_shift = hips ? 0.5 * (pred[5][2] + pred[6][2] - truth[5][2] - truth[6][2]) : 0.0;
+  const double hip_shift = hips ? root(pred)[2] - root(truth)[2] : 0.0;
   for (int j = 0; j < kJoints; ++j) {
     const auto& a = pred[std::size_t(j)];
     const auto& b = truth[std::size_t(j)];
