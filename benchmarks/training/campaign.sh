@@ -138,6 +138,8 @@ DATA_SK_SRC=${DATA_SK_SRC:-/var/tmp/yelan-data/sk-src}
 DATA_SK=${DATA_SK:-/var/tmp/yelan-data/sk}
 DATA_SKS=${DATA_SKS:-/var/tmp/yelan-data/sks}
 DATA_SK_FP2=${DATA_SK_FP2:-/var/tmp/yelan-data/sk-src-fp2}
+DATA_FPR=${DATA_FPR:-/var/tmp/yelan-data/sk-fpr}
+DATA_FPR_MIX=${DATA_FPR_MIX:-/var/tmp/yelan-data/sk-fpr-mix}
 STICK_CFG0=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json
 dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
@@ -555,6 +557,20 @@ case "$what" in
       --random-looks --frame-dancer --train-rooms 0 --val-rooms 0 --train-dancer-rooms 0 --val-dancer-rooms 24 \
       --free-arms 0.5 --front-print 2 --threads "${THREADS:-2}" ;;
   train-ev-fp2) sk_run ev-fp2 "$DATA_SK_FP2" --init "${EV_INIT:-models/campaign/sk-sided/checkpoint.h5}" ;;
+  # sk-fpr: 320 new training dancers (seed 2: none of sk-src's recordings; 80 of them in
+  # furnished rooms, as a third of the validation's are), each drawing its front cues' scale
+  # in 0.5-2 (--front-print 0.5-2: the cue at every strength, not one outfit); sk-fpr-mix adds
+  # sk-src-fp2's 160 (hard links, prefixed). ev-fpr: ev-fp2 (its step 4000) trained on the mix,
+  # lr 5e-4 cosine, validated on sk-src-fp2's val as before (scored after on sk-src's too).
+  ev-data-fpr)
+    "$Y" sim --dataset "$DATA_FPR" --seed 2 --train 240 --train-dancer-rooms 80 --val 0 --test 0 --duration 5s \
+      --random-looks --frame-dancer --free-arms 0.5 --front-print 0.5-2 --threads "${THREADS:-2}"
+    mkdir -p "$DATA_FPR_MIX/train"
+    for f in "$DATA_FPR"/train/*.yelan.h5; do ln -f "$f" "$DATA_FPR_MIX/train/s2-${f##*/}"; done
+    for f in "$DATA_SK_FP2"/train/*.yelan.h5; do ln -f "$f" "$DATA_FPR_MIX/train/s1-${f##*/}"; done ;;
+  train-ev-fpr)
+    CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
+      --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;
   # sk-depth: sk-sided's recipe (sided sticks, random init, 1500 steps) with pose.depth_map:
   # does z read off a depth map under each joint's xy map learn the depth the marginals do
   # not (sk-sided: 96.8 mm a joint after aligning the hips' depths, the per-view floor 104.0)?

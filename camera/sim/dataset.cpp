@@ -208,6 +208,15 @@ void free_member_arms(SimSpec& s, std::uint64_t seed, int i, bool room, double p
   s.name += "-free";
 }
 
+double member_front_print(const std::string& split, const SimSpec& s, std::uint64_t seed, double lo, double hi) {
+  if (!(hi > lo) || !s.dancer) return lo;
+  // Keyed by the member's split and name, not its index: the plain dancers and those in
+  // furnished rooms share indices.
+  std::uint64_t h = split_stream(split) ^ 0xf9a1;
+  for (const unsigned char c : s.name) h = hash64(h, c, 0x9f);
+  return lo + (hi - lo) * Rng(hash64(seed, h, 0xf9a2), 0xf9a3).uniform();
+}
+
 int make_dataset(const DatasetSpec& d, std::ostream& err) {
   if (d.out_dir.empty()) throw std::invalid_argument("dataset: no output folder");
   if (d.train < 0 || d.val < 0 || d.test < 0 || d.train_empty < 0 || d.val_empty < 0 || d.test_empty < 0 ||
@@ -226,6 +235,8 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   if (!(d.remix_arms >= 0 && d.remix_arms <= 1)) throw std::invalid_argument("dataset: the share of remixed arms must be in 0..1");
   if (!(d.free_arms >= 0 && d.free_arms <= 1)) throw std::invalid_argument("dataset: the share of free arms must be in 0..1");
   if (!(d.front_print >= 0 && d.front_print <= 3)) throw std::invalid_argument("dataset: the front print's scale must be in 0..3");
+  const double print_max = std::max(d.front_print, d.front_print_max);
+  if (!(print_max <= 3)) throw std::invalid_argument("dataset: the front print's scale must be in 0..3");
   if (const fs::path old = fs::path(d.out_dir) / "manifest.json"; fs::exists(old)) {
     std::ifstream in(old);
     nlohmann::json m;
@@ -249,8 +260,10 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     };
     // The same for the remixed and free arms and the front cues (manifests from before a key
     // were drawn at its default).
+    const double was_print = m.is_object() && m.contains("front_print") && m["front_print"].is_number() ? m["front_print"].get<double>() : 1.0;
     for (const Share& sh : {Share{"remix_arms", "--remix-arms", d.remix_arms, 0.0}, Share{"free_arms", "--free-arms", d.free_arms, 0.0},
-                            Share{"front_print", "--front-print", d.front_print, 1.0}}) {
+                            Share{"front_print", "--front-print", d.front_print, 1.0},
+                            Share{"front_print_max", "--front-print (its upper end)", print_max, was_print}}) {
       const double was_drawn = m.is_object() && m.contains(sh.key) && m[sh.key].is_number() ? m[sh.key].get<double>() : sh.absent;
       if (was_drawn != sh.asked) {
         std::ostringstream msg;
@@ -276,6 +289,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
                                      {"remix_arms", d.remix_arms},
                                      {"free_arms", d.free_arms},
                                      {"front_print", d.front_print},
+                                     {"front_print_max", print_max},
                                      {"counts", {{"train", d.train}, {"val", d.val}, {"test", d.test}}},
                                      {"empty_counts", {{"train", d.train_empty}, {"val", d.val_empty}, {"test", d.test_empty}}},
                                      {"room_counts", {{"train", d.train_rooms}, {"val", d.val_rooms}, {"test", d.test_rooms}}},
@@ -324,7 +338,7 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   }
   for (Job& j : jobs) {
     set_low_light_dn(j.spec.scene, d.low_light_dn);
-    j.spec.front_print = d.front_print;
+    j.spec.front_print = member_front_print(j.split, j.spec, d.seed, d.front_print, print_max);
   }
   // Temporary files of a run that was killed (name.tmp-PID-XXXXXX, its process gone) are removed:
   // their recordings are simulated again.

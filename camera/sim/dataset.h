@@ -61,6 +61,10 @@ struct DatasetSpec {
   // how strongly the events tell a dancer's front from the back. Not in the files' names:
   // a dataset is only added to at the scale its manifest names.
   double front_print = 1;
+  // Above front_print: each dancer recording (every split) draws its own scale uniformly in
+  // [front_print, front_print_max] from its own stream, so a net learns the cue at every
+  // strength and no split depends on one outfit (scene.json names the drawn scale).
+  double front_print_max = 1;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };
@@ -84,6 +88,10 @@ void remix_member_arms(SimSpec& spec, std::uint64_t seed, int i, bool room, doub
 // The same for free arms: sets SimSpec::free_arms_seed and appends "-free" when the draw says
 // so and the member's arms are not remixed.
 void free_member_arms(SimSpec& spec, std::uint64_t seed, int i, bool room, double p);
+
+// The front print's scale of a member (DatasetSpec::front_print..front_print_max): lo where
+// the range is empty or nobody dances, else drawn from the member's split and name.
+double member_front_print(const std::string& split, const SimSpec& spec, std::uint64_t seed, double lo, double hi);
 
 // Simulates what is missing, in parallel, and writes the manifest (every member's scene as
 // JSON, split, file). Returns the number of recordings simulated now.

@@ -180,7 +180,25 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   if (a.value("--low-light-dn")) d.low_light_dn = a.number_or("--low-light-dn", 20, 1e-3, 1e5);
   d.remix_arms = a.number_or("--remix-arms", 0, 0, 1);
   d.free_arms = a.number_or("--free-arms", 0, 0, 1);
-  d.front_print = a.number_or("--front-print", 1, 0, 3);
+  if (const auto fp = a.value("--front-print"); fp && fp->find('-', 1) != std::string::npos) {
+    // A range A-B: each dancer recording draws its own scale.
+    const std::size_t dash = fp->find('-', 1);
+    const auto end = [&](const std::string& t) {
+      std::size_t used = 0;
+      double v = -1;
+      try {
+        v = std::stod(t, &used);
+      } catch (const std::exception&) {
+      }
+      if (used != t.size() || !(v >= 0 && v <= 3)) throw UsageError("--front-print: expected S or A-B with 0 <= A < B <= 3, got '" + *fp + "'");
+      return v;
+    };
+    d.front_print = end(fp->substr(0, dash));
+    d.front_print_max = end(fp->substr(dash + 1));
+    if (!(d.front_print_max > d.front_print)) throw UsageError("--front-print: expected S or A-B with 0 <= A < B <= 3, got '" + *fp + "'");
+  } else {
+    d.front_print = d.front_print_max = a.number_or("--front-print", 1, 0, 3);
+  }
   d.threads = a.int_value_or("--threads", 0, 0, 256);
   d.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   try {

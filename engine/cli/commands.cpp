@@ -51,7 +51,7 @@ const std::vector<Command>& commands() {
        "                 [--train-empty N] [--val-empty N] [--test-empty N] [--random-looks] [--frame-dancer]\n"
        "                 [--train-rooms N] [--val-rooms N] [--test-rooms N] [--low-light-dn DN]\n"
        "                 [--train-dancer-rooms N] [--val-dancer-rooms N] [--test-dancer-rooms N] [--remix-arms P]\n"
-       "                 [--free-arms P] [--front-print S]\n"
+       "                 [--free-arms P] [--front-print S|A-B]\n"
        "       yelan sim --list\n"
        "A character performs a CMU clip or a procedural dance in a scene; a ray caster renders\n"
        "it at an adaptive rate (>= 1 kHz) and a v2e-style pixel model makes the events. OUT holds\n"
@@ -91,7 +91,8 @@ const std::vector<Command>& commands() {
        "--front-print S: every dancer's front cues (a dark brow band, a print on the chest in a\n"
        "shade far from the top's) scaled by S across and down: 1 as drawn, 2 a print over most of\n"
        "the chest, 0 none (scene.json: \"front_print\": S). Nothing else changes: the same\n"
-       "dancers, motions and views as at 1.\n"
+       "dancers, motions and views as at 1. --front-print A-B (e.g. 0.5-2): each dancer recording\n"
+       "of every split draws its own scale in [A, B] (its scene.json names it).\n"
        "Presets end in any of -occluded, -flicker, -clutter (a furnished room), -pan (the camera\n"
        "turns +-6 deg every 8 s), -shake (a hand-held tremor), -sweep (a hand-held camera looking\n"
        "around, tens of deg/s) and -empty (nobody there).\n",

@@ -128,6 +128,10 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   d.front_print = 5;
   CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("0..3"));
   d.front_print = 1;
+  // Nor with scales drawn from a range where the manifest names one.
+  d.front_print_max = 2;
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("(its upper end) 1"));
+  d.front_print_max = 1;
   // Low light is not in the names: adding at another level than the manifest's is refused.
   d.low_light_dn = 4;
   CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("--low-light-dn 20"));
@@ -143,6 +147,27 @@ TEST_CASE("dataset: made in parallel, resumable (done files kept, a killed run's
   d.duration_s = 0;
   CHECK_THROWS_AS(make_dataset(d, log), std::invalid_argument);
   std::filesystem::remove_all(dir);
+}
+
+TEST_CASE("dataset: a front-print range gives each dancer its own scale, the same on every run", "[sim]") {
+  std::set<double> drawn;
+  for (const char* split : {"train", "val", "test"})
+    for (int i = 0; i < 40; ++i) {
+      const SimSpec m = dataset_member(split, i, 2, 5.0);
+      const double s = member_front_print(split, m, 2, 0.5, 2);
+      CHECK(s >= 0.5);
+      CHECK(s < 2);
+      CHECK(s == member_front_print(split, m, 2, 0.5, 2));
+      CHECK(member_front_print(split, m, 2, 1.5, 1.5) == 1.5);  // an empty range is its end
+      drawn.insert(s);
+    }
+  CHECK(drawn.size() == 120);
+  double below = 0;
+  for (double s : drawn) below += s < 1.25;
+  CHECK(below > 40);  // uniform over the range: about half under its middle
+  CHECK(below < 80);
+  CHECK(member_front_print("train", dataset_member("train", 3, 2, 5.0), 3, 0.5, 2) != member_front_print("train", dataset_member("train", 3, 2, 5.0), 2, 0.5, 2));
+  CHECK(member_front_print("train", dataset_empty_member("train", 3, 2, 5.0), 2, 0.5, 2) == 0.5);  // nobody to dress
 }
 
 TEST_CASE("dataset: empty scenes have events from the room alone, no valid joint, empty masks", "[sim]") {
