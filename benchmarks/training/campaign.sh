@@ -571,6 +571,13 @@ case "$what" in
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;
+  # ev-fpr-s4: the same from the same weights at pose.head_stride 4 (33 x 44 heatmaps, cells of
+  # 8 sensor px; the same parameters): ev-fp2 puts both hips, both knees and both feet between
+  # the two, 1.5-2 of its 16-px cells apart; do finer maps separate them?
+  train-ev-fpr-s4)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-stride4.json DATA=$DATA_FPR_MIX/train \
+      train pose ev-fpr-s4 "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
+      --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;
   # sk-depth: sk-sided's recipe (sided sticks, random init, 1500 steps) with pose.depth_map:
   # does z read off a depth map under each joint's xy map learn the depth the marginals do
   # not (sk-sided: 96.8 mm a joint after aligning the hips' depths, the per-view floor 104.0)?

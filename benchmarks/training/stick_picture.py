@@ -3,7 +3,10 @@
 in grey, the true joints green, the predicted red, and the last stage's xy heatmaps of the right
 hand and the right elbow in red over the next two panels.
 
-    stick_picture.py RECORDING.yelan.h5 INPUT.h5 OUTPUT.h5 OUT.png [T_US]
+    stick_picture.py RECORDING.yelan.h5 INPUT.h5 OUTPUT.h5 OUT.png [T_US [J,J]]
+
+J,J: the two joints whose heatmaps are drawn (SPEC's order: 0 head, 1/2 shoulders R/L,
+3/4 elbows, 5/6 hips, 7/8 hands, 9/10 knees, 11/12 feet); 7,3 (right hand, right elbow) unless given.
 
 INPUT.h5: `input` (S x C x 130 x 173, the window ending at T_US, as `yelan model forward`
 reads it); OUTPUT.h5: what `yelan model forward` wrote for it. The 2x2-downscaled sensor of the
@@ -33,7 +36,8 @@ def heat(k):
     big=np.repeat(np.repeat(h,16*S,0),16*S,1)[:260*S,:346*S]
     return big
 panels=[img.copy()]
-for k in (7,3):  # handR, elbowR
+shown=tuple(int(k) for k in sys.argv[6].split(',')) if len(sys.argv)>6 else (7,3)
+for k in shown:
     q=img.copy(); hb=heat(k)
     q[...,0]=np.clip(q[...,0]*0.5+hb*255,0,255); q[...,1]=(q[...,1]*0.5).astype(np.uint8); q[...,2]=(q[...,2]*0.5).astype(np.uint8)
     panels.append(q)
