@@ -574,6 +574,12 @@ case "$what" in
   # ev-fpr-s4: the same from the same weights at pose.head_stride 4 (33 x 44 heatmaps, cells of
   # 8 sensor px; the same parameters): ev-fp2 puts both hips, both knees and both feet between
   # the two, 1.5-2 of its 16-px cells apart; do finer maps separate them?
+  # ev-fpr-mask: ev-fpr (its step 2000) behind the shipped stage 1's masks, reused as early
+  # exit reuses them (the default's recipe, lr 3e-4): as deployed ev-fpr loses 30 mm to stage
+  # 1's masks where the default, trained behind them, loses 18.
+  train-ev-fpr-mask)
+    CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr-mask "${FPR_MASK_STEPS:-2000}" --val-data "$DATA_SK_FP2/val" \
+      --lr 3e-4 --init "${EV_INIT:-models/campaign/ev-fpr/checkpoint.h5}" --mask-weights models/default.h5 --mask-reuse 16 ;;
   train-ev-fpr-s4)
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-stride4.json DATA=$DATA_FPR_MIX/train \
       train pose ev-fpr-s4 "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \

@@ -30,10 +30,11 @@ S=2
 base=np.clip(inp[0]*255,0,255).astype(np.uint8)           # 130 x 173 (input px = 2 sensor px)
 img=np.repeat(np.repeat(base,2*S,0),2*S,1)               # sensor x S
 img=np.stack([img]*3,-1).copy()
-hm=o['heatmaps/stage1/xy'][-1]                           # 13 x 17 x 22
+hm=o['heatmaps/stage1/xy'][-1]                           # 13 x 17 x 22 (stride 8) or 13 x 33 x 44 (stride 4)
+cell=2*int(round(130/hm.shape[1]))                       # sensor px a heatmap cell
 def heat(k):
     h=hm[k]/hm[k].max()
-    big=np.repeat(np.repeat(h,16*S,0),16*S,1)[:260*S,:346*S]
+    big=np.repeat(np.repeat(h,cell*S,0),cell*S,1)[:260*S,:346*S]
     return big
 panels=[img.copy()]
 shown=tuple(int(k) for k in sys.argv[6].split(',')) if len(sys.argv)>6 else (7,3)
