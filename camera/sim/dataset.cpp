@@ -234,9 +234,8 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   const double low_dn = d.low_light_dn ? *d.low_light_dn : lighting(LightLevel::low, false).level;
   if (!(d.remix_arms >= 0 && d.remix_arms <= 1)) throw std::invalid_argument("dataset: the share of remixed arms must be in 0..1");
   if (!(d.free_arms >= 0 && d.free_arms <= 1)) throw std::invalid_argument("dataset: the share of free arms must be in 0..1");
-  if (!(d.front_print >= 0 && d.front_print <= 3)) throw std::invalid_argument("dataset: the front print's scale must be in 0..3");
   const double print_max = std::max(d.front_print, d.front_print_max);
-  if (!(print_max <= 3)) throw std::invalid_argument("dataset: the front print's scale must be in 0..3");
+  if (!(d.front_print >= 0 && print_max <= 3)) throw std::invalid_argument("dataset: the front print's scale must be in 0..3");
   if (const fs::path old = fs::path(d.out_dir) / "manifest.json"; fs::exists(old)) {
     std::ifstream in(old);
     nlohmann::json m;
@@ -260,11 +259,14 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
     };
     // The same for the remixed and free arms and the front cues (manifests from before a key
     // were drawn at its default).
-    const double was_print = m.is_object() && m.contains("front_print") && m["front_print"].is_number() ? m["front_print"].get<double>() : 1.0;
+    const auto drawn = [&m](const char* key, double absent) {
+      return m.is_object() && m.contains(key) && m[key].is_number() ? m[key].get<double>() : absent;
+    };
+    const double was_print = drawn("front_print", 1.0);
     for (const Share& sh : {Share{"remix_arms", "--remix-arms", d.remix_arms, 0.0}, Share{"free_arms", "--free-arms", d.free_arms, 0.0},
                             Share{"front_print", "--front-print", d.front_print, 1.0},
                             Share{"front_print_max", "--front-print (its upper end)", print_max, was_print}}) {
-      const double was_drawn = m.is_object() && m.contains(sh.key) && m[sh.key].is_number() ? m[sh.key].get<double>() : sh.absent;
+      const double was_drawn = drawn(sh.key, sh.absent);
       if (was_drawn != sh.asked) {
         std::ostringstream msg;
         msg << "dataset " << d.out_dir << " was drawn with " << sh.flag << " " << was_drawn << " (its manifest), this run asks "

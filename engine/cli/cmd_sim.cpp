@@ -183,6 +183,7 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   if (const auto fp = a.value("--front-print"); fp && fp->find('-', 1) != std::string::npos) {
     // A range A-B: each dancer recording draws its own scale.
     const std::size_t dash = fp->find('-', 1);
+    const std::string bad = "--front-print: expected S or A-B with 0 <= A < B <= 3, got '" + *fp + "'";
     const auto end = [&](const std::string& t) {
       std::size_t used = 0;
       double v = -1;
@@ -190,12 +191,12 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
         v = std::stod(t, &used);
       } catch (const std::exception&) {
       }
-      if (used != t.size() || !(v >= 0 && v <= 3)) throw UsageError("--front-print: expected S or A-B with 0 <= A < B <= 3, got '" + *fp + "'");
+      if (used != t.size() || !(v >= 0 && v <= 3)) throw UsageError(bad);
       return v;
     };
     d.front_print = end(fp->substr(0, dash));
     d.front_print_max = end(fp->substr(dash + 1));
-    if (!(d.front_print_max > d.front_print)) throw UsageError("--front-print: expected S or A-B with 0 <= A < B <= 3, got '" + *fp + "'");
+    if (!(d.front_print_max > d.front_print)) throw UsageError(bad);
   } else {
     d.front_print = d.front_print_max = a.number_or("--front-print", 1, 0, 3);
   }
