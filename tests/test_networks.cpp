@@ -77,6 +77,18 @@ ModelConfig tiny_with(const std::string& pose_key, const std::string& name) {
   return parse_model_config(text, name);
 }
 
+// Both nets from one seed, in inference, on one random input of cfg's shape (the variant's
+// config: the plain net reads the same input).
+void init_and_forward(PoseNet& variant, PoseNet& plain, const ModelConfig& cfg) {
+  variant.init(3);
+  plain.init(3);
+  variant.set_training(false);
+  plain.set_training(false);
+  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 5);
+  variant.forward(x.act, cfg.window);
+  plain.forward(x.act, cfg.window);
+}
+
 }  // namespace
 
 TEST_CASE("pose net parameters match the reference's names, shapes and count", "[networks][pose]") {
@@ -371,13 +383,7 @@ TEST_CASE("pose net with hourglass_skip: the same parameters, other joints, grad
   REQUIRE(ps.size() == pp.size());
   for (std::size_t i = 0; i < ps.size(); ++i) CHECK(ps[i].param->shape == pp[i].param->shape);
   // The same weights give other joints: the skip is in the function.
-  skip.init(3);
-  plain.init(3);
-  skip.set_training(false);
-  plain.set_training(false);
-  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 5);
-  skip.forward(x.act, cfg.window);
-  plain.forward(x.act, cfg.window);
+  init_and_forward(skip, plain, cfg);
   double diff = 0;
   for (std::size_t i = 0; i < skip.joints().size(); ++i) diff += std::abs(skip.joints()[i] - plain.joints()[i]);
   CHECK(diff > 1e-3);
@@ -414,13 +420,7 @@ TEST_CASE("pose net with depth_map: a fourth hourglass per stage, z read off it 
   CHECK(pd.size() - pp.size() == xy0 * std::size_t(cfg.stages));
   // The same seed gives the shared parts the same weights: x and y are the plain net's, z is
   // each joint's depth map averaged under its xy map.
-  deep.init(3);
-  plain.init(3);
-  deep.set_training(false);
-  plain.set_training(false);
-  yelan::test::Owned x(cfg.window, cfg.channels, cfg.height(), cfg.width(), 5);
-  deep.forward(x.act, cfg.window);
-  plain.forward(x.act, cfg.window);
+  init_and_forward(deep, plain, cfg);
   REQUIRE(plain.depth_map(0) == nullptr);
   const int T = cfg.stages, J = cfg.joints;
   const layers::Act& xy = deep.heatmap(T - 1, 0);

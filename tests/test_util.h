@@ -3,24 +3,14 @@
 #include <random>
 #include <vector>
 
+#include "camera/io/asan.h"
 #include "kernels/cpu.h"
 
 namespace yelan::test {
 
-// Whether this build runs under AddressSanitizer (gcc says so one way, clang another): such
-// a build is there for memory errors and undefined behaviour, and its long numeric sweeps may
-// sample sparser, since the release run checks every sample.
-#if defined(__SANITIZE_ADDRESS__)
-inline constexpr bool kSanitized = true;
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-inline constexpr bool kSanitized = true;
-#else
-inline constexpr bool kSanitized = false;
-#endif
-#else
-inline constexpr bool kSanitized = false;
-#endif
+// A sanitizer build is there for memory errors and undefined behaviour: its long numeric
+// sweeps may sample sparser, since the release run checks every sample.
+inline constexpr bool kSanitized = kUnderAsan;
 
 inline std::vector<float> random_floats(std::size_t n, unsigned seed, float lo = -1.f, float hi = 1.f) {
   std::mt19937 rng(seed);

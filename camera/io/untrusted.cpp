@@ -24,15 +24,8 @@
 #include <tuple>
 #include <vector>
 
+#include "camera/io/asan.h"
 #include "camera/io/format_error.h"
-
-#if defined(__SANITIZE_ADDRESS__)
-#define YELAN_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define YELAN_ASAN 1
-#endif
-#endif
 
 namespace yelan::camera {
 
@@ -168,10 +161,10 @@ bool vet_once(const std::string& path, const std::function<void()>& read_all, co
       const int null = ::open("/dev/null", O_WRONLY);
       if (null >= 0) ::dup2(null, 2), ::dup2(null, 1);
     }
-#ifndef YELAN_ASAN  // ASan reserves terabytes of address space; its own reports bound the damage there
-    const rlimit mem{memory_limit, memory_limit};
-    ::setrlimit(RLIMIT_AS, &mem);
-#endif
+    if (!kUnderAsan) {  // ASan reserves terabytes of address space; its own reports bound the damage there
+      const rlimit mem{memory_limit, memory_limit};
+      ::setrlimit(RLIMIT_AS, &mem);
+    }
     const rlimit cpu{limits.seconds, limits.seconds + 1};  // SIGXCPU at the soft limit, SIGKILL a second later
     ::setrlimit(RLIMIT_CPU, &cpu);
     const rlimit no_core{0, 0};
