@@ -80,6 +80,30 @@ void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>&
   for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > logit_cut ? 1.f : 0.f;
 }
 
+void grow_mask(std::vector<float>& keep, int h, int w, int r) {
+  if (r < 0 || h < 0 || w < 0 || keep.size() != std::size_t(h) * std::size_t(w))
+    throw std::invalid_argument("grow_mask: need r >= 0 and an h x w mask");
+  if (r == 0) return;
+  // Along one line of n values `stride` apart: each becomes 1 when a 1 lies within r of it.
+  const auto line = [r](float* p, int n, std::size_t stride, std::vector<float>& tmp) {
+    tmp.assign(std::size_t(n), 0.f);
+    int last = -(1 << 30);  // the latest 1 at or before i, then the next at or after it
+    for (int i = 0; i < n; ++i) {
+      if (p[std::size_t(i) * stride] != 0) last = i;
+      if (i - last <= r) tmp[std::size_t(i)] = 1.f;
+    }
+    int next = 1 << 30;
+    for (int i = n - 1; i >= 0; --i) {
+      if (p[std::size_t(i) * stride] != 0) next = i;
+      if (next - i <= r) tmp[std::size_t(i)] = 1.f;
+    }
+    for (int i = 0; i < n; ++i) p[std::size_t(i) * stride] = tmp[std::size_t(i)];
+  };
+  std::vector<float> tmp;
+  for (int y = 0; y < h; ++y) line(keep.data() + std::size_t(y) * w, w, 1, tmp);
+  for (int x = 0; x < w; ++x) line(keep.data() + x, h, std::size_t(w), tmp);
+}
+
 void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep) {
   for (int cb = 0; cb < a.cb(); ++cb) {
     float* p = a.data + (std::size_t(n) * a.cb() + cb) * a.pixels() * 16;

@@ -32,6 +32,10 @@ inline constexpr float kMaskCut = 0.1f;
 // one value (0 or 1) per input pixel.
 void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep, float cut = kMaskCut);
 
+// A binarised h x w mask (0 or 1 per pixel) grown by r pixels in every direction: a pixel is
+// kept when any pixel of the (2r + 1)-square around it is (a separable running maximum).
+void grow_mask(std::vector<float>& keep, int h, int w, int r);
+
 // Frame n of `a` multiplied, every channel, by one value per pixel.
 void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep);
 

@@ -99,6 +99,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");
     if (r.contains("mask_cut_reused")) c.mask_cut_reused = get_num(r, where + ".run", "mask_cut_reused");
     if (r.contains("idle_recheck_s")) c.idle_recheck_s = get_num(r, where + ".run", "idle_recheck_s");
+    if (r.contains("mask_grow")) c.mask_grow = get_int(r, where + ".run", "mask_grow");
     if (r.contains("presence")) {
       const json& pr = section(r, "presence", where + ".run");
       c.presence_a = get_num(pr, where + ".run.presence", "a");
@@ -116,6 +117,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.presence_tau_s >= 0 && c.presence_tau_s <= 60, "run.presence.tau_s must lie in 0..60 (seconds)"},
       {c.depth_tau_s >= 0 && c.depth_tau_s <= 60, "run.depth_tau_s must lie in 0..60 (seconds)"},
       {c.idle_recheck_s >= 0 && c.idle_recheck_s <= 1, "run.idle_recheck_s must lie in 0..1 (seconds)"},
+      {c.mask_grow >= 0 && c.mask_grow <= 64, "run.mask_grow must lie in 0..64 (input pixels)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",
        "mask.role must be mask, presence or none"},
       {(c.mask_role == "mask") == c.masked_input,

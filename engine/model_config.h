@@ -73,6 +73,10 @@ struct ModelConfig {
   //   early exit reuses between stage 1's runs (stage 2's input only; presence and early
   //   exit read every mask at run.mask_cut). A future mask predicted up to 0.3 s before is
   //   a guess at where the limbs will be: a lower cut keeps the events near its edge.
+  //   run.mask_grow (optional, default 0): stage 2's masks (stage 1's, fresh or reused, and
+  //   the true ones a trainer or `eval --true-mask` uses) grown by this many input pixels in
+  //   every direction (a square), so a limb the mask misses by a few pixels still reaches
+  //   stage 2; presence, early exit and the IoU read the masks as cut.
   //   run.idle_recheck_s (optional, default 0): while stage 1's last run saw nobody, it runs
   //   again once this many seconds have passed (0: on every tick; at most the future masks'
   //   span, n_masks / 50 s), so an empty room costs a fraction of stage 1 while a dancer who
@@ -84,6 +88,7 @@ struct ModelConfig {
   double depth_scale = 1;
   double depth_tau_s = 0;
   double idle_recheck_s = 0;
+  int mask_grow = 0;
   bool depth_forearms = true;
   double presence_a = 3.0, presence_b = 13.8;
   double presence_tau_s = 0;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <random>
 #include <set>
 
 #include "camera/io/event_reader.h"
@@ -47,6 +48,23 @@ struct RecordingFixture {
     for (int i = 0; i <= k; ++i) stream.next(win);
     return win;
   }
+  // The q-quantile of mask `channel`'s probabilities on `frame` of `win`: a cut that keeps
+  // part of the picture (a random net's masks all keep everything at the usual cut).
+  float quantile_cut(const sim::SimWindow& win, int frame, int channel, double q) {
+    const yelan::ModelConfig& cfg = nets->cfg;
+    yelan::layers::ActBuf one;
+    one.resize(1, cfg.channels, cfg.height(), cfg.width());
+    yelan::input::downscale_tore(win.frames[std::size_t(frame)].tore, cfg.sensor_height, cfg.sensor_width, cfg.downscale,
+                                 one.act, 0);
+    yelan::layers::NoGrad no_grad;
+    nets->mask.forward(one.act);
+    const yelan::layers::Act& m = nets->mask.masks();
+    std::vector<float> p(m.pixels());
+    for (std::size_t i = 0; i < p.size(); ++i) p[i] = 1 / (1 + std::exp(-m.data[i * 16 + channel]));
+    const std::size_t at = std::size_t(q * double(p.size()));
+    std::nth_element(p.begin(), p.begin() + at, p.end());
+    return p[at];
+  }
 };
 
 }  // namespace
@@ -54,10 +72,15 @@ struct RecordingFixture {
 TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at the same instant", "[run]") {
   RecordingFixture fx;
   const std::string &w = fx.w, &rec = fx.rec;
-
-  // The trainer's side: consecutive windows with the full history, behind the frozen mask net.
-  const yelan::ModelConfig& cfg = fx.nets->cfg;
   const sim::SimWindow win = fx.window(11, 0);  // well into the recording
+  std::vector<float> ungrown;  // the same cut, not grown
+  // As the model cuts its masks, and with them grown (run.mask_grow).
+  for (const int grow : {0, 3}) {
+  INFO("run.mask_grow " << grow);
+  // The trainer's side: consecutive windows with the full history, behind the frozen mask net.
+  yelan::ModelConfig cfg = fx.nets->cfg;
+  cfg.mask_grow = grow;
+  if (grow) cfg.mask_cut = fx.quantile_cut(win, cfg.window - 1, 0, 0.7);  // a mask with something to grow into
   yelan::train::BatchBuilder builder(cfg, 1, yelan::train::MaskSource::net);
   builder.add(win, fx.nets->mask, nullptr);
   const yelan::layers::Act& batch = builder.batch().input.act;
@@ -68,6 +91,8 @@ TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at t
   ro.tick_origin_us = 0;
   ro.crop_margin = 0;
   ro.skip_empty = false;
+  ro.mask_grow = grow;
+  if (grow) ro.mask_cut = cfg.mask_cut;
   yelan::run::PosePipeline pipe(w, 346, 260, ro);
   auto reader = yelan::camera::open_event_file(rec);
   std::vector<yelan::camera::Event> ev;
@@ -92,6 +117,80 @@ TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at t
   double sum = 0;
   for (std::size_t i = 0; i < per_frame; ++i) sum += batch.data[i];
   CHECK(sum > 0);
+  // Grown, the mask keeps all the same cut kept ungrown, and more.
+  if (grow == 0) continue;
+  const std::vector<float> now(batch.data, batch.data + std::size_t(cfg.window) * per_frame);
+  cfg.mask_grow = 0;
+  yelan::train::BatchBuilder same_cut(cfg, 1, yelan::train::MaskSource::net);
+  same_cut.add(win, fx.nets->mask, nullptr);
+  const yelan::layers::Act& ug = same_cut.batch().input.act;
+  ungrown.assign(ug.data, ug.data + now.size());
+  std::size_t more = 0, lost = 0;
+  for (std::size_t i = 0; i < now.size(); ++i) {
+    lost += ungrown[i] != 0 && now[i] != ungrown[i];
+    more += ungrown[i] == 0 && now[i] != 0;
+  }
+  CHECK(lost == 0);
+  CHECK(more > 0);
+  }
+}
+
+TEST_CASE("grow_mask: a pixel is kept when one within r of it (a square) was, on odd shapes", "[run]") {
+  std::mt19937 rng(7);
+  for (const auto& [h, w] : {std::pair{1, 1}, {5, 3}, {7, 11}, {13, 2}, {9, 17}})
+    for (const int r : {0, 1, 2, 4, 20}) {
+      INFO(h << " x " << w << ", r " << r);
+      std::vector<float> m(std::size_t(h) * w);
+      for (auto& v : m) v = rng() % 9 == 0 ? 1.f : 0.f;
+      std::vector<float> got = m;
+      yelan::input::grow_mask(got, h, w, r);
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          float want = 0;
+          for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
+            for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx) want = std::max(want, m[std::size_t(yy) * w + xx]);
+          REQUIRE(got[std::size_t(y) * w + x] == want);
+        }
+    }
+  // One pixel grows into a (2r + 1)-square, clipped at the border.
+  std::vector<float> one(7 * 9, 0.f);
+  one[3 * 9 + 1] = 1;
+  yelan::input::grow_mask(one, 7, 9, 2);
+  CHECK(std::count(one.begin(), one.end(), 1.f) == 5 * 4);
+  std::vector<float> wrong(10);
+  CHECK_THROWS_AS(yelan::input::grow_mask(wrong, 3, 3, 1), std::invalid_argument);
+  CHECK_THROWS_AS(yelan::input::grow_mask(one, 7, 9, -1), std::invalid_argument);
+}
+
+TEST_CASE("run.mask_grow: the true masks a trainer reads grow too; the config refuses a bad value", "[run]") {
+  RecordingFixture fx;
+  const sim::SimWindow win = fx.window(11, 0);
+  yelan::ModelConfig cfg = fx.nets->cfg;
+  std::vector<std::vector<float>> kept;
+  for (const int grow : {0, 2}) {
+    cfg.mask_grow = grow;
+    yelan::train::BatchBuilder b(cfg, 1, yelan::train::MaskSource::truth);
+    b.add(win, fx.nets->mask, nullptr);
+    const auto& in = b.batch().input.act;
+    kept.emplace_back(in.data, in.data + in.floats());
+  }
+  std::size_t more = 0, lost = 0;
+  for (std::size_t i = 0; i < kept[0].size(); ++i) {
+    lost += kept[0][i] != 0 && kept[1][i] != kept[0][i];
+    more += kept[0][i] == 0 && kept[1][i] != 0;
+  }
+  CHECK(lost == 0);
+  CHECK(more > 0);
+  // micro has no run section: one with the key alone.
+  const std::string text = fx.nets->cfg.json;
+  REQUIRE(text.find("\"run\"") == std::string::npos);
+  const auto with = [&](const std::string& value) {
+    return text.substr(0, text.rfind('}')) + ", \"run\": {\"mask_grow\": " + value + "}}";
+  };
+  CHECK(yelan::parse_model_config(text, "micro").mask_grow == 0);
+  CHECK(yelan::parse_model_config(with("2"), "grow").mask_grow == 2);
+  CHECK_THROWS_AS(yelan::parse_model_config(with("-1"), "grow"), yelan::ConfigError);
+  CHECK_THROWS_AS(yelan::parse_model_config(with("65"), "grow"), yelan::ConfigError);
 }
 
 
@@ -106,22 +205,10 @@ TEST_CASE("mask reuse: each frame behind the future mask of stage 1's latest run
   yelan::layers::ActBuf one, expect;
   one.resize(1, cfg.channels, cfg.height(), cfg.width());
   expect.resize(1, cfg.channels, cfg.height(), cfg.width());
-  {
-    // Cut at the median probability of a future mask, so that masks of other ages differ
-    // (a random net's masks all keep everything at its usual cut).
-    const auto& f = win.frames[std::size_t(lead)];
-    yelan::input::downscale_tore(f.tore, sh, sw, d, one.act, 0);
-    yelan::layers::NoGrad no_grad;
-    fx.nets->mask.forward(one.act);
-    const yelan::layers::Act& m = fx.nets->mask.masks();
-    std::vector<float> p(m.pixels());
-    for (std::size_t i = 0; i < p.size(); ++i) p[i] = 1 / (1 + std::exp(-m.data[i * 16 + 1]));  // channel 1
-    std::nth_element(p.begin(), p.begin() + p.size() / 2, p.end());
-    cfg.mask_cut = p[p.size() / 2];
-    // And the reused future masks at their own cut, lower (run.mask_cut_reused).
-    std::nth_element(p.begin(), p.begin() + p.size() / 4, p.end());
-    cfg.mask_cut_reused = p[p.size() / 4];
-  }
+  // Cut at the median probability of a future mask, so that masks of other ages differ; the
+  // reused future masks at their own cut, lower (run.mask_cut_reused).
+  cfg.mask_cut = fx.quantile_cut(win, lead, 1, 0.5);
+  cfg.mask_cut_reused = fx.quantile_cut(win, lead, 1, 0.25);
   std::vector<float> keep, fresh_keep;
   int ages_seen = 0;
   bool some_mask_differs = false;

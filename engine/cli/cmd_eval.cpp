@@ -43,6 +43,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
   if (a.value("--depth-tau")) o.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
+  o.mask_grow = spec.mask_grow;
   const bool keep = a.value("--poses").has_value();
   run::StreamEvalResult r;
   std::string what;  // "N recordings" or "N scenes"
@@ -103,7 +104,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
-                "--low-light-dn", "--poses", "--depth-tau", "--mask-pictures"},
+                "--low-light-dn", "--poses", "--depth-tau", "--mask-pictures", "--mask-grow"},
                {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
@@ -140,6 +141,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   spec.floors = !a.flag("--no-floors");
   spec.framed = !a.flag("--unframed");
   spec.history_s = a.number_or("--history", 5, 0, 60);
+  if (a.value("--mask-grow")) spec.mask_grow = a.int_value_or("--mask-grow", 0, 0, 64);
   if (data) {
     try {
       spec.recordings = camera::sim::list_recordings(*data);

@@ -119,8 +119,9 @@ struct PosePipeline::Impl {
   std::int64_t mask_t = 0;
   std::int64_t idle_recheck_us = 0;
   std::vector<std::vector<float>> masks;  // N binarised masks, H x W
-  // Stage 2's masks where run.mask_cut_reused differs: the future ones (1..N-1) at that cut
-  // (entry 0 unused), with their boxes; empty: stage 2 reads `masks`.
+  // Stage 2's masks where they differ from `masks`: the future ones (1..N-1) at
+  // run.mask_cut_reused, and with run.mask_grow every one (0..N-1) grown, with their boxes;
+  // an empty entry (or none): stage 2 reads `masks`.
   std::vector<std::vector<float>> reused;
   std::vector<PoseNet::CropBox> reused_boxes;
   std::vector<float> scores;
@@ -171,6 +172,7 @@ struct PosePipeline::Impl {
     beta = o.beta >= 0 ? o.beta : cfg.run_beta;
     if (o.presence_ab) nets.cfg.presence_a = (*o.presence_ab)[0], nets.cfg.presence_b = (*o.presence_ab)[1];
     if (o.mask_cut) nets.cfg.mask_cut = *o.mask_cut;
+    if (o.mask_grow) nets.cfg.mask_grow = *o.mask_grow;
     if (o.presence_tau_s) nets.cfg.presence_tau_s = *o.presence_tau_s;
     smoother = PresenceSmoother(nets.cfg.presence_tau_s);
     if (o.depth_tau_s) nets.cfg.depth_tau_s = *o.depth_tau_s;
@@ -253,7 +255,7 @@ struct PosePipeline::Impl {
   }
 
   // What stage 2 reads behind mask `use`: a reused future one at run.mask_cut_reused, and its box.
-  bool reads_reused(int use) const { return use > 0 && !reused.empty(); }
+  bool reads_reused(int use) const { return std::size_t(use) < reused.size() && !reused[std::size_t(use)].empty(); }
   const std::vector<float>& stage2_mask(int use) const {
     return reads_reused(use) ? reused[std::size_t(use)] : masks[std::size_t(use)];
   }
@@ -368,12 +370,15 @@ struct PosePipeline::Impl {
         q.score = scores[std::size_t(c)];
       }
       reused.clear();
-      if (cfg.reused_mask_cut() != cfg.mask_cut) {
+      if (cfg.reused_mask_cut() != cfg.mask_cut || cfg.mask_grow > 0) {
         reused.resize(std::size_t(cfg.n_masks));
         reused_boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
-        for (int c = 1; c < cfg.n_masks; ++c) {
-          input::mask_cut(m, 0, c, reused[std::size_t(c)], float(cfg.reused_mask_cut()));
-          reused_boxes[std::size_t(c)] = bounding_box(reused[std::size_t(c)], m.w, m.h);
+        for (int c = cfg.mask_grow > 0 ? 0 : 1; c < cfg.n_masks; ++c) {
+          auto& r = reused[std::size_t(c)];
+          if (c == 0) r = masks[0];
+          else input::mask_cut(m, 0, c, r, float(cfg.reused_mask_cut()));
+          input::grow_mask(r, m.h, m.w, cfg.mask_grow);
+          reused_boxes[std::size_t(c)] = bounding_box(r, m.w, m.h);
         }
       }
       mask_t = T;

@@ -39,6 +39,8 @@ struct RunOptions {
   std::optional<std::array<double, 2>> presence_ab;
   // Stage 1's sigmoid cut instead of the model's run.mask_cut (calibrate's sweep of cuts).
   std::optional<double> mask_cut;
+  // Stage 2's masks grown by this many input pixels instead of the model's run.mask_grow.
+  std::optional<int> mask_grow;
   // P(person)'s smoothing time constant (s) instead of the model's run.presence.tau_s.
   std::optional<double> presence_tau_s;
   // The head depth's smoothing time constant (s) instead of the model's run.depth_tau_s.

@@ -101,6 +101,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     if (source_ == MaskSource::truth) {
       auto cells = mask_cells(f.mask, sw, d, H, W);
       for (float& c : cells) c = c > 0 ? 1.f : 0.f;  // any human pixel keeps the cell
+      input::grow_mask(cells, H, W, cfg_.mask_grow);
       input::apply_mask(in, n, cells);
     }
     if (occ && occ->uniform() < 0.5) {
@@ -160,6 +161,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     std::vector<float> keep;
     for (int t = 0; t < S; ++t) {
       input::mask_cut(mask_net.masks(), t, 0, keep, float(cfg_.mask_cut));  // channel 0: the current mask
+      input::grow_mask(keep, H, W, cfg_.mask_grow);
       input::apply_mask(in, used_ * S + t, keep);
     }
   } else if (source_ == MaskSource::net) {
@@ -174,6 +176,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     for (int t = 0; t < S; ++t) {
       const int age = (t + k) % P;  // as yelan run: a reused future mask at run.mask_cut_reused
       input::mask_cut(mask_net.masks(), (t + k) / P, age, keep, float(age ? cfg_.reused_mask_cut() : cfg_.mask_cut));
+      input::grow_mask(keep, H, W, cfg_.mask_grow);
       input::apply_mask(in, used_ * S + t, keep);
     }
   }

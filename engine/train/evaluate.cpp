@@ -53,6 +53,7 @@ void place_in_clip(sim::SimSpec& s, std::uint64_t seed, std::size_t i, bool fram
 
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   weights::LoadedNetworks nets(weights::load_weights(spec.weights), spec.weights);
+  if (spec.mask_grow) nets.cfg.mask_grow = *spec.mask_grow;
   const ModelConfig& cfg = nets.cfg;
   MaskNet& mask = nets.mask;
   PoseNet& pose = nets.pose;

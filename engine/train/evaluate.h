@@ -34,6 +34,7 @@ struct EvalSpec {
   // middle window, stage 1's mask against the truth (mask_picture.h); none
   // where stage 1 does not run (true_mask, or a config whose stage 2 reads no mask).
   std::string mask_pictures;
+  std::optional<int> mask_grow;  // instead of the model's run.mask_grow
 };
 
 struct EvalResult {
