@@ -9,6 +9,7 @@
 #include <memory>
 #include <random>
 #include <set>
+#include <utility>
 
 #include "camera/io/event_reader.h"
 #include "camera/sim/presets.h"
@@ -67,71 +68,76 @@ struct RecordingFixture {
   }
 };
 
+// Against input `before`, how many values of `after` that `before` kept changed (a grown mask
+// must keep them as they were), and how many `before` zeroed are kept.
+std::pair<std::size_t, std::size_t> lost_and_gained(const std::vector<float>& before, const std::vector<float>& after) {
+  std::size_t lost = 0, gained = 0;
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    lost += before[i] != 0 && after[i] != before[i];
+    gained += before[i] == 0 && after[i] != 0;
+  }
+  return {lost, gained};
+}
+
 }  // namespace
 
 TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at the same instant", "[run]") {
   RecordingFixture fx;
   const std::string &w = fx.w, &rec = fx.rec;
   const sim::SimWindow win = fx.window(11, 0);  // well into the recording
-  std::vector<float> ungrown;  // the same cut, not grown
   // As the model cuts its masks, and with them grown (run.mask_grow).
   for (const int grow : {0, 3}) {
-  INFO("run.mask_grow " << grow);
-  // The trainer's side: consecutive windows with the full history, behind the frozen mask net.
-  yelan::ModelConfig cfg = fx.nets->cfg;
-  cfg.mask_grow = grow;
-  if (grow) cfg.mask_cut = fx.quantile_cut(win, cfg.window - 1, 0, 0.7);  // a mask with something to grow into
-  yelan::train::BatchBuilder builder(cfg, 1, yelan::train::MaskSource::net);
-  builder.add(win, fx.nets->mask, nullptr);
-  const yelan::layers::Act& batch = builder.batch().input.act;
+    INFO("run.mask_grow " << grow);
+    // The trainer's side: consecutive windows with the full history, behind the frozen mask net.
+    yelan::ModelConfig cfg = fx.nets->cfg;
+    cfg.mask_grow = grow;
+    if (grow) cfg.mask_cut = fx.quantile_cut(win, cfg.window - 1, 0, 0.7);  // a mask with something to grow into
+    yelan::train::BatchBuilder builder(cfg, 1, yelan::train::MaskSource::net);
+    builder.add(win, fx.nets->mask, nullptr);
+    const yelan::layers::Act& batch = builder.batch().input.act;
 
-  // `yelan run`'s side: ticks on the recording's frame times, stage 1 on every tick.
-  yelan::run::RunOptions ro;
-  ro.beta = 2;
-  ro.tick_origin_us = 0;
-  ro.crop_margin = 0;
-  ro.skip_empty = false;
-  ro.mask_grow = grow;
-  if (grow) ro.mask_cut = cfg.mask_cut;
-  yelan::run::PosePipeline pipe(w, 346, 260, ro);
-  auto reader = yelan::camera::open_event_file(rec);
-  std::vector<yelan::camera::Event> ev;
-  int matched = 0;
-  const std::size_t per_frame = std::size_t(batch.cb()) * batch.pixels() * 16;
-  auto on_pose = [&](const yelan::run::Pose& p) {
-    for (int t = 0; t < cfg.window; ++t) {
-      if (p.t_us != win.frames[std::size_t(t)].t_us) continue;
-      const yelan::layers::Act& in = pipe.last_input();
-      REQUIRE(std::size_t(in.cb()) * in.pixels() * 16 == per_frame);
-      INFO("frame " << t << " at " << p.t_us << " us");
-      CHECK(std::memcmp(in.data, batch.data + std::size_t(t) * per_frame, per_frame * sizeof(float)) == 0);
-      ++matched;
+    // `yelan run`'s side: ticks on the recording's frame times, stage 1 on every tick.
+    yelan::run::RunOptions ro;
+    ro.beta = 2;
+    ro.tick_origin_us = 0;
+    ro.crop_margin = 0;
+    ro.skip_empty = false;
+    ro.mask_grow = grow;
+    if (grow) ro.mask_cut = cfg.mask_cut;
+    yelan::run::PosePipeline pipe(w, 346, 260, ro);
+    auto reader = yelan::camera::open_event_file(rec);
+    std::vector<yelan::camera::Event> ev;
+    int matched = 0;
+    const std::size_t per_frame = std::size_t(batch.cb()) * batch.pixels() * 16;
+    auto on_pose = [&](const yelan::run::Pose& p) {
+      for (int t = 0; t < cfg.window; ++t) {
+        if (p.t_us != win.frames[std::size_t(t)].t_us) continue;
+        const yelan::layers::Act& in = pipe.last_input();
+        REQUIRE(std::size_t(in.cb()) * in.pixels() * 16 == per_frame);
+        INFO("frame " << t << " at " << p.t_us << " us");
+        CHECK(std::memcmp(in.data, batch.data + std::size_t(t) * per_frame, per_frame * sizeof(float)) == 0);
+        ++matched;
+      }
+    };
+    while (reader->read(ev, 1 << 15) > 0) {
+      pipe.push(ev, on_pose);
+      ev.clear();
     }
-  };
-  while (reader->read(ev, 1 << 15) > 0) {
-    pipe.push(ev, on_pose);
-    ev.clear();
-  }
-  CHECK(matched == cfg.window);
-  // And the input is not trivially equal: the mask cut something and kept something.
-  double sum = 0;
-  for (std::size_t i = 0; i < per_frame; ++i) sum += batch.data[i];
-  CHECK(sum > 0);
-  // Grown, the mask keeps all the same cut kept ungrown, and more.
-  if (grow == 0) continue;
-  const std::vector<float> now(batch.data, batch.data + std::size_t(cfg.window) * per_frame);
-  cfg.mask_grow = 0;
-  yelan::train::BatchBuilder same_cut(cfg, 1, yelan::train::MaskSource::net);
-  same_cut.add(win, fx.nets->mask, nullptr);
-  const yelan::layers::Act& ug = same_cut.batch().input.act;
-  ungrown.assign(ug.data, ug.data + now.size());
-  std::size_t more = 0, lost = 0;
-  for (std::size_t i = 0; i < now.size(); ++i) {
-    lost += ungrown[i] != 0 && now[i] != ungrown[i];
-    more += ungrown[i] == 0 && now[i] != 0;
-  }
-  CHECK(lost == 0);
-  CHECK(more > 0);
+    CHECK(matched == cfg.window);
+    // And the input is not trivially equal: the mask cut something and kept something.
+    double sum = 0;
+    for (std::size_t i = 0; i < per_frame; ++i) sum += batch.data[i];
+    CHECK(sum > 0);
+    // Grown, the mask keeps all the same cut kept ungrown, and more.
+    if (grow == 0) continue;
+    const std::vector<float> now(batch.data, batch.data + std::size_t(cfg.window) * per_frame);
+    cfg.mask_grow = 0;
+    yelan::train::BatchBuilder same_cut(cfg, 1, yelan::train::MaskSource::net);
+    same_cut.add(win, fx.nets->mask, nullptr);
+    const yelan::layers::Act& ungrown = same_cut.batch().input.act;
+    const auto [lost, more] = lost_and_gained({ungrown.data, ungrown.data + now.size()}, now);
+    CHECK(lost == 0);
+    CHECK(more > 0);
   }
 }
 
@@ -174,11 +180,7 @@ TEST_CASE("run.mask_grow: the true masks a trainer reads grow too; the config re
     const auto& in = b.batch().input.act;
     kept.emplace_back(in.data, in.data + in.floats());
   }
-  std::size_t more = 0, lost = 0;
-  for (std::size_t i = 0; i < kept[0].size(); ++i) {
-    lost += kept[0][i] != 0 && kept[1][i] != kept[0][i];
-    more += kept[0][i] == 0 && kept[1][i] != 0;
-  }
+  const auto [lost, more] = lost_and_gained(kept[0], kept[1]);
   CHECK(lost == 0);
   CHECK(more > 0);
   // micro has no run section: one with the key alone.

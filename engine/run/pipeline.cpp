@@ -122,8 +122,8 @@ struct PosePipeline::Impl {
   // Stage 2's masks where they differ from `masks`: the future ones (1..N-1) at
   // run.mask_cut_reused, and with run.mask_grow every one (0..N-1) grown, with their boxes;
   // an empty entry (or none): stage 2 reads `masks`.
-  std::vector<std::vector<float>> reused;
-  std::vector<PoseNet::CropBox> reused_boxes;
+  std::vector<std::vector<float>> stage2_masks;
+  std::vector<PoseNet::CropBox> stage2_boxes;
   std::vector<float> scores;
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
   int in_use = 0;
@@ -254,13 +254,15 @@ struct PosePipeline::Impl {
     return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
   }
 
-  // What stage 2 reads behind mask `use`: a reused future one at run.mask_cut_reused, and its box.
-  bool reads_reused(int use) const { return std::size_t(use) < reused.size() && !reused[std::size_t(use)].empty(); }
+  // What stage 2 reads behind mask `use` (its own cut or grown where the config says so), and its box.
+  bool has_own_stage2_mask(int use) const {
+    return std::size_t(use) < stage2_masks.size() && !stage2_masks[std::size_t(use)].empty();
+  }
   const std::vector<float>& stage2_mask(int use) const {
-    return reads_reused(use) ? reused[std::size_t(use)] : masks[std::size_t(use)];
+    return has_own_stage2_mask(use) ? stage2_masks[std::size_t(use)] : masks[std::size_t(use)];
   }
   const PoseNet::CropBox& stage2_box(int use) const {
-    return reads_reused(use) ? reused_boxes[std::size_t(use)] : boxes[std::size_t(use)];
+    return has_own_stage2_mask(use) ? stage2_boxes[std::size_t(use)] : boxes[std::size_t(use)];
   }
 
   // The TORE read out at T and downscaled into `unmasked`: only inside `box` (input pixels)
@@ -369,16 +371,16 @@ struct PosePipeline::Impl {
         q.blob = largest_blob_share(mc, m.w, m.h);
         q.score = scores[std::size_t(c)];
       }
-      reused.clear();
+      stage2_masks.clear();
       if (cfg.reused_mask_cut() != cfg.mask_cut || cfg.mask_grow > 0) {
-        reused.resize(std::size_t(cfg.n_masks));
-        reused_boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
+        stage2_masks.resize(std::size_t(cfg.n_masks));
+        stage2_boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
         for (int c = cfg.mask_grow > 0 ? 0 : 1; c < cfg.n_masks; ++c) {
-          auto& r = reused[std::size_t(c)];
+          auto& r = stage2_masks[std::size_t(c)];
           if (c == 0) r = masks[0];
           else input::mask_cut(m, 0, c, r, float(cfg.reused_mask_cut()));
           input::grow_mask(r, m.h, m.w, cfg.mask_grow);
-          reused_boxes[std::size_t(c)] = bounding_box(r, m.w, m.h);
+          stage2_boxes[std::size_t(c)] = bounding_box(r, m.w, m.h);
         }
       }
       mask_t = T;
