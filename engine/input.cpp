@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -78,6 +79,40 @@ void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>&
   keep.resize(logits.pixels());
   const float* p = logits.data + (std::size_t(n) * logits.cb() + channel / 16) * logits.pixels() * 16 + channel % 16;
   for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > logit_cut ? 1.f : 0.f;
+}
+
+void mask_cut_all(const layers::Act& logits, int n, float cut, std::vector<std::vector<float>>& keep,
+                  std::vector<MaskExtent>& extent, int first) {
+  if (n < 0 || n >= logits.n || first < 0 || first > logits.c) throw std::invalid_argument("mask_cut_all: no such frame or channel");
+  if (!(cut > 0 && cut < 1)) throw std::invalid_argument("mask_cut_all: the cut must lie in (0, 1)");
+  const float logit_cut = std::log(cut / (1 - cut));
+  const std::size_t P = logits.pixels();
+  keep.resize(std::size_t(logits.c));
+  extent.assign(std::size_t(logits.c), MaskExtent{0, logits.w, logits.h, 0, 0});
+  for (int c = 0; c < logits.c; ++c)
+    if (c < first) keep[std::size_t(c)].clear();
+    else keep[std::size_t(c)].assign(P, 0.f);
+  for (int cb = first / 16; cb < logits.cb(); ++cb) {
+    const float* p = logits.data + (std::size_t(n) * logits.cb() + cb) * P * 16;
+    const int lo = std::max(first - cb * 16, 0), hi = std::min(16, logits.c - cb * 16);
+    const std::uint32_t lanes = ((1u << hi) - 1) & ~((1u << lo) - 1);  // the block's channels to cut
+    for (int y = 0; y < logits.h; ++y)
+      for (int x = 0; x < logits.w; ++x) {
+        const std::size_t i = std::size_t(y) * logits.w + x;
+        std::uint32_t bits = 0;
+        for (int l = 0; l < 16; ++l) bits |= std::uint32_t(p[i * 16 + l] > logit_cut) << l;
+        for (bits &= lanes; bits; bits &= bits - 1) {
+          const int c = cb * 16 + __builtin_ctz(bits);
+          keep[std::size_t(c)][i] = 1.f;
+          MaskExtent& e = extent[std::size_t(c)];
+          ++e.kept;
+          e.x0 = std::min(e.x0, x), e.y0 = std::min(e.y0, y);
+          e.x1 = std::max(e.x1, x + 1), e.y1 = std::max(e.y1, y + 1);
+        }
+      }
+  }
+  for (MaskExtent& e : extent)
+    if (e.kept == 0) e = MaskExtent{};
 }
 
 void grow_mask(std::vector<float>& keep, int h, int w, int r) {

@@ -32,6 +32,20 @@ inline constexpr float kMaskCut = 0.1f;
 // one value (0 or 1) per input pixel.
 void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep, float cut = kMaskCut);
 
+// What mask_cut_all says of each channel's mask: its kept pixels and their bounding box
+// [x0, x1) x [y0, y1) (all zero for an empty mask).
+struct MaskExtent {
+  std::size_t kept = 0;
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
+// mask_cut of channels first..C-1 of frame n at once, with each mask's extent: one pass over
+// the logits, whose 16 channels of a pixel share a cache line (mask_cut channel by channel
+// reads every line once per channel). keep and extent get C entries; those under `first`
+// are left empty.
+void mask_cut_all(const layers::Act& logits, int n, float cut, std::vector<std::vector<float>>& keep,
+                  std::vector<MaskExtent>& extent, int first = 0);
+
 // A binarised h x w mask (0 or 1 per pixel) grown by r pixels in every direction: a pixel is
 // kept when any pixel of the (2r + 1)-square around it is (a separable running maximum).
 void grow_mask(std::vector<float>& keep, int h, int w, int r);

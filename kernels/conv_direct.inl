@@ -24,30 +24,52 @@ struct TileArgs {
   const float* bias;             // null, or 16 per output block
 };
 
-// Source lane c of one tap: R broadcasts times NQ weight vectors.
-template <int R, int NQ>
-inline void tile_lane(const TileArgs& a, const float* st, const float* wt, int c, vf (&acc)[R][NQ]) {
-  vf wv[NQ];
-#pragma GCC unroll 16
-  for (int q = 0; q < NQ; ++q) wv[q] = loadf(wt + (q / CONV_NV) * a.w_ob + c * kBlock + (q % CONV_NV) * VL);
+// A tile's last output block may hold at most 8 channels (kBlock / 2): the 24-channel
+// layers of stage 1 (8 in their second block) and the pose net's 8-channel ones. Only its
+// lower half is then computed, on vectors of 8 lanes (of 4 on NEON: never wider than the
+// native ones), and the upper half stored as zeros. On AVX-512 the half is one 256-bit
+// vector, which cores that split 512-bit FMAs in two (AMD Zen 4) run at twice the rate; on
+// the others it skips the block's upper native vectors outright. Lanes past the channels
+// hold zero weights and bias, so the stored zeros are what the full block would compute.
+constexpr int HALF_VL = VL < kBlock / 2 ? VL : kBlock / 2;
+constexpr int HALF_NV = kBlock / 2 / HALF_VL;
+typedef float vhalf __attribute__((vector_size(HALF_VL * 4)));
+typedef float vhalfu __attribute__((vector_size(HALF_VL * 4), aligned(4)));
+
+// R output pixels x NB output blocks, the last of them half when HALF: NQ full native
+// vectors and NH half ones per pixel.
+template <int R, int NB, bool HALF = false>
+void tile(const TileArgs& a) {
+  constexpr int NF = HALF ? NB - 1 : NB;  // full blocks
+  constexpr int NQ = NF * CONV_NV;
+  constexpr int NH = HALF ? HALF_NV : 0;
+  vf acc[R][NQ > 0 ? NQ : 1];
+  vhalf hacc[R][NH > 0 ? NH : 1];
+  const float* hb = a.bias ? a.bias + NF * kBlock : nullptr;
 #pragma GCC unroll 16
   for (int r = 0; r < R; ++r) {
-    const float xv = st[r * a.src_r + c];
 #pragma GCC unroll 16
-    for (int q = 0; q < NQ; ++q) acc[r][q] += xv * wv[q];
+    for (int q = 0; q < NQ; ++q) acc[r][q] = a.bias ? loadf(a.bias + (q / CONV_NV) * kBlock + (q % CONV_NV) * VL) : vf{};
+#pragma GCC unroll 16
+    for (int q = 0; q < NH; ++q) hacc[r][q] = hb ? *reinterpret_cast<const vhalfu*>(hb + q * HALF_VL) : vhalf{};
   }
-}
-
-template <int R, int NB>
-void tile(const TileArgs& a) {
-  constexpr int NQ = NB * CONV_NV;  // native vectors across the tile's output channels
-  vf acc[R][NQ];
+  // Source lane c of one tap: R broadcasts times NQ + NH weight vectors.
+  const auto lane = [&](const float* st, const float* wt, int c) __attribute__((always_inline)) {
+    vf wv[NQ > 0 ? NQ : 1];
+    vhalf hv[NH > 0 ? NH : 1];
 #pragma GCC unroll 16
-  for (int q = 0; q < NQ; ++q) {
-    const vf b = a.bias ? loadf(a.bias + (q / CONV_NV) * kBlock + (q % CONV_NV) * VL) : vf{};
+    for (int q = 0; q < NQ; ++q) wv[q] = loadf(wt + (q / CONV_NV) * a.w_ob + c * kBlock + (q % CONV_NV) * VL);
 #pragma GCC unroll 16
-    for (int r = 0; r < R; ++r) acc[r][q] = b;
-  }
+    for (int q = 0; q < NH; ++q) hv[q] = *reinterpret_cast<const vhalfu*>(wt + NF * a.w_ob + c * kBlock + q * HALF_VL);
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r) {
+      const float xv = st[r * a.src_r + c];
+#pragma GCC unroll 16
+      for (int q = 0; q < NQ; ++q) acc[r][q] += xv * wv[q];
+#pragma GCC unroll 16
+      for (int q = 0; q < NH; ++q) hacc[r][q] += xv * hv[q];
+    }
+  };
   for (int cb = 0; cb < a.ncb; ++cb) {
     const int lanes = cb == a.ncb - 1 ? a.last_lanes : kBlock;
     const float* s = a.src + cb * a.src_cb;
@@ -57,91 +79,55 @@ void tile(const TileArgs& a) {
       const float* wt = w + a.taps[t].w;
       if (lanes == kBlock) {
 #pragma GCC unroll 16
-        for (int c = 0; c < kBlock; ++c) tile_lane<R, NQ>(a, st, wt, c, acc);
+        for (int c = 0; c < kBlock; ++c) lane(st, wt, c);
       } else {
-        for (int c = 0; c < lanes; ++c) tile_lane<R, NQ>(a, st, wt, c, acc);
-      }
-    }
-  }
-#pragma GCC unroll 16
-  for (int r = 0; r < R; ++r)
-#pragma GCC unroll 16
-    for (int q = 0; q < NQ; ++q)
-      storef(a.dst + r * a.dst_r + (q / CONV_NV) * a.dst_ob + (q % CONV_NV) * VL, acc[r][q]);
-}
-
-// A tile whose one output block has at most 8 channels (kBlock / 2): only its lower half is
-// computed, on vectors of 8 lanes (of 4 on NEON: never wider than the native ones), and the
-// upper half stored as zeros. On AVX-512 the half is one 256-bit vector, which cores that
-// split 512-bit FMAs in two (AMD Zen 4) run at twice the rate; on the others it skips the
-// block's upper native vectors outright.
-// Twice CONV_R pixels a tile: 12 independent FMA chains, as the FMA latency needs (6 ymm
-// chains leave Zen 4's two 256-bit pipes a quarter idle); AVX2 12 of 16 ymm, NEON 24 of 32 q.
-constexpr int HALF_R = 2 * CONV_R;
-constexpr int HALF_VL = VL < kBlock / 2 ? VL : kBlock / 2;
-constexpr int HALF_NV = kBlock / 2 / HALF_VL;
-typedef float vhalf __attribute__((vector_size(HALF_VL * 4)));
-typedef float vhalfu __attribute__((vector_size(HALF_VL * 4), aligned(4)));
-
-template <int R>
-void tile_half(const TileArgs& a) {
-  vhalf acc[R][HALF_NV];
-#pragma GCC unroll 16
-  for (int q = 0; q < HALF_NV; ++q) {
-    const vhalf b = a.bias ? *reinterpret_cast<const vhalfu*>(a.bias + q * HALF_VL) : vhalf{};
-#pragma GCC unroll 16
-    for (int r = 0; r < R; ++r) acc[r][q] = b;
-  }
-  for (int cb = 0; cb < a.ncb; ++cb) {
-    const int lanes = cb == a.ncb - 1 ? a.last_lanes : kBlock;
-    const float* s = a.src + cb * a.src_cb;
-    const float* w = a.w + cb * a.w_cb;
-    for (int t = 0; t < a.ntaps; ++t) {
-      const float* st = s + a.taps[t].src;
-      const float* wt = w + a.taps[t].w;
-      for (int c = 0; c < lanes; ++c) {
-        vhalf wv[HALF_NV];
-#pragma GCC unroll 16
-        for (int q = 0; q < HALF_NV; ++q) wv[q] = *reinterpret_cast<const vhalfu*>(wt + c * kBlock + q * HALF_VL);
-#pragma GCC unroll 16
-        for (int r = 0; r < R; ++r) {
-          const float xv = st[r * a.src_r + c];
-#pragma GCC unroll 16
-          for (int q = 0; q < HALF_NV; ++q) acc[r][q] += xv * wv[q];
-        }
+        for (int c = 0; c < lanes; ++c) lane(st, wt, c);
       }
     }
   }
 #pragma GCC unroll 16
   for (int r = 0; r < R; ++r) {
-    float* d = a.dst + r * a.dst_r;
 #pragma GCC unroll 16
-    for (int q = 0; q < HALF_NV; ++q) {
-      *reinterpret_cast<vhalfu*>(d + q * HALF_VL) = acc[r][q];
+    for (int q = 0; q < NQ; ++q) storef(a.dst + r * a.dst_r + (q / CONV_NV) * a.dst_ob + (q % CONV_NV) * VL, acc[r][q]);
+    float* d = a.dst + r * a.dst_r + NF * a.dst_ob;
+#pragma GCC unroll 16
+    for (int q = 0; q < NH; ++q) {
+      *reinterpret_cast<vhalfu*>(d + q * HALF_VL) = hacc[r][q];
       *reinterpret_cast<vhalfu*>(d + kBlock / 2 + q * HALF_VL) = vhalf{};
     }
   }
 }
 
+// A tile of one half block only has twice CONV_R pixels: 12 independent FMA chains, as the
+// FMA latency needs (6 ymm chains leave Zen 4's two 256-bit pipes a quarter idle); AVX2 12
+// of 16 ymm, NEON 24 of 32 q. Tiles with full blocks beside the half keep CONV_R pixels.
+constexpr int HALF_R = 2 * CONV_R;
+
 using TileFn = void (*)(const TileArgs&);
 
-template <int NB, int... R>
+template <int NB, bool HALF, int... R>
 constexpr auto tiles_for(std::integer_sequence<int, R...>) {
-  return std::array<TileFn, sizeof...(R)>{&tile<R + 1, NB>...};
+  return std::array<TileFn, sizeof...(R)>{&tile<R + 1, NB, HALF>...};
 }
-template <int... NB>
+template <bool HALF, int... NB>
 constexpr auto tile_table(std::integer_sequence<int, NB...>) {
   return std::array<std::array<TileFn, CONV_R>, sizeof...(NB)>{
-      tiles_for<NB + 1>(std::make_integer_sequence<int, CONV_R>{})...};
+      tiles_for<NB + 1, HALF>(std::make_integer_sequence<int, CONV_R>{})...};
 }
-// kTiles[nb - 1][r - 1] is tile<r, nb>.
-constexpr auto kTiles = tile_table(std::make_integer_sequence<int, CONV_NB>{});
-template <int... R>
-constexpr auto half_tiles(std::integer_sequence<int, R...>) {
-  return std::array<TileFn, sizeof...(R)>{&tile_half<R + 1>...};
+// kTiles[nb - 1][r - 1] is tile<r, nb>; kHalfLastTiles[nb - 1][r - 1] is tile<r, nb, true>
+// (its [0] row unused: one half block alone takes kHalfTiles' longer rows).
+constexpr auto kTiles = tile_table<false>(std::make_integer_sequence<int, CONV_NB>{});
+constexpr auto kHalfLastTiles = tile_table<true>(std::make_integer_sequence<int, CONV_NB>{});
+// kHalfTiles[r - 1] is tile<r, 1, true>, up to HALF_R pixels.
+constexpr auto kHalfTiles = tiles_for<1, true>(std::make_integer_sequence<int, HALF_R>{});
+
+// The tiles for a group of nb output blocks, the last of them half when half_last, and
+// their widest tile in pixels.
+inline const TileFn* tiles_for_group(int nb, bool half_last, int* tile_r) {
+  *tile_r = half_last && nb == 1 ? HALF_R : CONV_R;
+  if (!half_last) return kTiles[nb - 1].data();
+  return nb == 1 ? kHalfTiles.data() : kHalfLastTiles[std::clamp(nb, 1, CONV_NB) - 1].data();
 }
-// kHalfTiles[r - 1] is tile_half<r>.
-constexpr auto kHalfTiles = half_tiles(std::make_integer_sequence<int, HALF_R>{});
 
 inline int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 inline int ceil_div(int a, int b) { return -floor_div(-a, b); }
@@ -161,11 +147,10 @@ struct RowJob {
   std::ptrdiff_t col_w[kMaxKernel];
 };
 
-// half: the tiles' one output block has at most 8 channels (tile_half).
-inline void run_row(const RowJob& job, TileArgs a, int nb, bool half = false) {
-  half = half && nb == 1;
-  const TileFn* tiles = half ? kHalfTiles.data() : kTiles[nb - 1].data();
-  const int tile_r = half ? HALF_R : CONV_R;
+// half_last: the tiles' last output block has at most 8 channels (see tile).
+inline void run_row(const RowJob& job, TileArgs a, int nb, bool half_last = false) {
+  int tile_r;
+  const TileFn* tiles = tiles_for_group(nb, half_last, &tile_r);
   Tap taps[kMaxTaps];
   int t_lo = 0, t_hi = job.T;
   for (int k = 0; k < job.ncol; ++k) {
@@ -245,7 +230,7 @@ void conv_fwd(const ConvShape& s, const float* x, const float* w, const float* b
         a.dst_r = kBlock;
         a.dst_ob = y_plane;
         a.bias = bias ? bias + ob0 * kBlock : nullptr;
-        run_row(job, a, nb, ob0 == OCB - 1 && s.oc - ob0 * kBlock <= kBlock / 2);
+        run_row(job, a, nb, ob0 + nb == OCB && s.oc - (OCB - 1) * kBlock <= kBlock / 2);
       }
 }
 
@@ -295,7 +280,7 @@ void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, float* d
           if (job.nrow == 0) job.ncol = 0;
           a.src = dy + std::ptrdiff_t(n) * OCB * y_plane;
           a.dst = dx + (std::ptrdiff_t(n) * ICB + cb0) * x_plane + (std::ptrdiff_t(ih) * s.iw + phase) * kBlock;
-          run_row(job, a, nb);
+          run_row(job, a, nb, cb0 + nb == ICB && s.ic - (ICB - 1) * kBlock <= kBlock / 2);
         }
       }
 }

@@ -31,6 +31,7 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
   const int chunks = (T + kWinoChunk - 1) / kWinoChunk;
   const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock, y_plane = std::ptrdiff_t(OH) * OW * kBlock;
   const std::ptrdiff_t cs = std::ptrdiff_t(kWinoChunk) * kBlock;  // one channel block of one product
+  const bool half_last = s.oc - (OCB - 1) * kBlock <= kBlock / 2;  // see tile
 #pragma omp parallel
   {
     // V: [36][ICB][chunk][16] transformed inputs, M: [36][OCB][chunk][16] products
@@ -45,15 +46,23 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
           const float* xb = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane;
           for (int t = 0; t < tc; ++t) {
             const int ih0 = (t0 + t) / TW * 4 - s.pad_h, iw0 = (t0 + t) % TW * 4 - s.pad_w;
+            // Most tiles lie inside the image: their 36 loads need no test.
+            const bool inside = ih0 >= 0 && iw0 >= 0 && ih0 + 6 <= s.ih && iw0 + 6 <= s.iw;
             for (int q = 0; q < CONV_NV; ++q) {
               vf d[6][6], r[6][6];
-              for (int i = 0; i < 6; ++i)
-                for (int j = 0; j < 6; ++j) {
-                  const int ih = ih0 + i, iw = iw0 + j;
-                  d[i][j] = ih >= 0 && ih < s.ih && iw >= 0 && iw < s.iw
-                                ? loadf(xb + (std::ptrdiff_t(ih) * s.iw + iw) * kBlock + q * VL)
-                                : vf{};
-                }
+              if (inside) {
+                const float* p = xb + (std::ptrdiff_t(ih0) * s.iw + iw0) * kBlock + q * VL;
+                for (int i = 0; i < 6; ++i)
+                  for (int j = 0; j < 6; ++j) d[i][j] = loadf(p + (std::ptrdiff_t(i) * s.iw + j) * kBlock);
+              } else {
+                for (int i = 0; i < 6; ++i)
+                  for (int j = 0; j < 6; ++j) {
+                    const int ih = ih0 + i, iw = iw0 + j;
+                    d[i][j] = ih >= 0 && ih < s.ih && iw >= 0 && iw < s.iw
+                                  ? loadf(xb + (std::ptrdiff_t(ih) * s.iw + iw) * kBlock + q * VL)
+                                  : vf{};
+                  }
+              }
               for (int j = 0; j < 6; ++j) {  // columns: r[.][j] = B^T d[.][j]
                 vf col[6], out[6];
                 for (int i = 0; i < 6; ++i) col[i] = d[i][j];
@@ -74,6 +83,8 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
         for (int xi = 0; xi < 36; ++xi)
           for (int ob0 = 0; ob0 < OCB; ob0 += CONV_NB) {
             const int nb = std::min(CONV_NB, OCB - ob0);
+            int tile_r;
+            const TileFn* tiles = tiles_for_group(nb, ob0 + nb == OCB && half_last, &tile_r);
             TileArgs a;
             a.src_r = kBlock;
             a.src_cb = cs;
@@ -87,11 +98,11 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
             a.dst_r = kBlock;
             a.dst_ob = cs;
             a.bias = nullptr;
-            for (int t = 0; t < tc; t += CONV_R) {
-              const int r = std::min(CONV_R, tc - t);
+            for (int t = 0; t < tc; t += tile_r) {
+              const int r = std::min(tile_r, tc - t);
               a.src = V + (std::ptrdiff_t(xi) * ICB * kWinoChunk + t) * kBlock;
               a.dst = M + ((std::ptrdiff_t(xi) * OCB + ob0) * kWinoChunk + t) * kBlock;
-              kTiles[nb - 1][r - 1](a);
+              tiles[r - 1](a);
             }
           }
         // Output transform: y = A^T M A + bias, clipped at the image's right and bottom.

@@ -27,20 +27,6 @@ constexpr double kFocalPx = camera::sim::kDavis346FocalPx;
 // Limb bones over the DHP19 joints: shoulder-elbow, elbow-hand, hip-knee, knee-foot, both sides.
 constexpr int kBones[8][2] = {{1, 3}, {3, 7}, {2, 4}, {4, 8}, {5, 9}, {9, 11}, {6, 10}, {10, 12}};
 
-// The smallest box holding every nonzero pixel of a w x h mask; empty for an empty mask.
-PoseNet::CropBox bounding_box(const std::vector<float>& mask, int w, int h) {
-  PoseNet::CropBox b{w, h, 0, 0};
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x)
-      if (mask[std::size_t(y) * w + x] != 0) {
-        b.x0 = std::min(b.x0, x);
-        b.y0 = std::min(b.y0, y);
-        b.x1 = std::max(b.x1, x + 1);
-        b.y1 = std::max(b.y1, y + 1);
-      }
-  return b.empty() ? PoseNet::CropBox{} : b;
-}
-
 // Mean sigmoid of channel c's logits over the pixels the cut kept (0 where none).
 float mean_probability_inside(const layers::Act& logits, int c, const std::vector<float>& keep) {
   const float* p = logits.data + std::size_t(c / 16) * logits.pixels() * 16 + c % 16;
@@ -124,6 +110,8 @@ struct PosePipeline::Impl {
   // an empty entry (or none): stage 2 reads `masks`.
   std::vector<std::vector<float>> stage2_masks;
   std::vector<PoseNet::CropBox> stage2_boxes;
+  std::vector<char> stage2_grown;  // whether stage2_masks[c] is grown yet
+  std::vector<input::MaskExtent> extents;
   std::vector<float> scores;
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
   int in_use = 0;
@@ -258,8 +246,15 @@ struct PosePipeline::Impl {
   bool has_own_stage2_mask(int use) const {
     return std::size_t(use) < stage2_masks.size() && !stage2_masks[std::size_t(use)].empty();
   }
-  const std::vector<float>& stage2_mask(int use) const {
-    return has_own_stage2_mask(use) ? stage2_masks[std::size_t(use)] : masks[std::size_t(use)];
+  const std::vector<float>& stage2_mask(int use) {
+    if (!has_own_stage2_mask(use)) return masks[std::size_t(use)];
+    auto& r = stage2_masks[std::size_t(use)];
+    if (!stage2_grown[std::size_t(use)]) {
+      const layers::Act& m = nets.mask.masks();
+      input::grow_mask(r, m.h, m.w, nets.cfg.mask_grow);
+      stage2_grown[std::size_t(use)] = true;
+    }
+    return r;
   }
   const PoseNet::CropBox& stage2_box(int use) const {
     return has_own_stage2_mask(use) ? stage2_boxes[std::size_t(use)] : boxes[std::size_t(use)];
@@ -357,31 +352,40 @@ struct PosePipeline::Impl {
     if (run_mask) {
       nets.mask.forward(unmasked.act);
       const layers::Act& m = nets.mask.masks();
-      masks.resize(std::size_t(cfg.n_masks));
-      for (int c = 0; c < cfg.n_masks; ++c) input::mask_cut(m, 0, c, masks[std::size_t(c)], float(cfg.mask_cut));
+      input::mask_cut_all(m, 0, float(cfg.mask_cut), masks, extents);
       scores = nets.mask.scores();
       boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
       cues.assign(std::size_t(cfg.n_masks), Cues{});
       for (int c = 0; c < cfg.n_masks; ++c) {
-        const auto& mc = masks[std::size_t(c)];
-        boxes[std::size_t(c)] = bounding_box(mc, m.w, m.h);
+        const input::MaskExtent& e = extents[std::size_t(c)];
+        boxes[std::size_t(c)] = {e.x0, e.y0, e.x1, e.y1};
         Cues& q = cues[std::size_t(c)];
-        q.share = float(std::count_if(mc.begin(), mc.end(), [](float v) { return v != 0; })) / float(mc.size());
-        q.mean_p = mean_probability_inside(m, c, mc);
-        q.blob = largest_blob_share(mc, m.w, m.h);
+        q.share = float(e.kept) / float(m.pixels());
+        if (opt.stage1_cues) {
+          q.mean_p = mean_probability_inside(m, c, masks[std::size_t(c)]);
+          q.blob = largest_blob_share(masks[std::size_t(c)], m.w, m.h);
+        }
         q.score = scores[std::size_t(c)];
       }
       stage2_masks.clear();
+      stage2_grown.clear();
       if (cfg.reused_mask_cut() != cfg.mask_cut || cfg.mask_grow > 0) {
-        stage2_masks.resize(std::size_t(cfg.n_masks));
-        stage2_boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
-        for (int c = cfg.mask_grow > 0 ? 0 : 1; c < cfg.n_masks; ++c) {
-          auto& r = stage2_masks[std::size_t(c)];
-          if (c == 0) r = masks[0];
-          else input::mask_cut(m, 0, c, r, float(cfg.reused_mask_cut()));
-          input::grow_mask(r, m.h, m.w, cfg.mask_grow);
-          stage2_boxes[std::size_t(c)] = bounding_box(r, m.w, m.h);
+        input::mask_cut_all(m, 0, float(cfg.reused_mask_cut()), stage2_masks, extents, 1);
+        if (cfg.mask_grow > 0) {
+          stage2_masks[0] = masks[0];
+          extents[0] = input::MaskExtent{0, boxes[0].x0, boxes[0].y0, boxes[0].x1, boxes[0].y1};
         }
+        // A mask grown by r has its box grown by r (clipped to the frame); the masks themselves
+        // are grown when stage 2 first reads one (stage2_mask), one a tick, not N a run.
+        const int r = cfg.mask_grow;
+        stage2_boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
+        for (int c = 0; c < cfg.n_masks; ++c) {
+          const input::MaskExtent& e = extents[std::size_t(c)];
+          if (e.x1 > e.x0)
+            stage2_boxes[std::size_t(c)] = {std::max(e.x0 - r, 0), std::max(e.y0 - r, 0), std::min(e.x1 + r, m.w),
+                                            std::min(e.y1 + r, m.h)};
+        }
+        stage2_grown.assign(std::size_t(cfg.n_masks), r == 0);
       }
       mask_t = T;
       have_masks = true;

@@ -52,6 +52,9 @@ struct RunOptions {
   // On ticks where stage 2 alone reads the TORE behind a stored mask, read it out only in the
   // mask's box (the poses are the same; false: the whole sensor every tick, for comparison).
   bool tore_box = true;
+  // Fill Pose::mask_mean_p and mask_blob (what calibrate's --ticks records; a flood fill and
+  // a sigmoid per pixel of every mask stage 1 makes). Off, they stay 0.
+  bool stage1_cues = false;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
@@ -64,7 +67,8 @@ struct Pose {
   float confidence = 1;       // P(a person is there), calibrated
   bool person = true;         // confidence >= RunOptions::presence_threshold
   float mask_share = 0;       // the mask's share of the frame (what confidence is computed from)
-  // More of what stage 1 says (recorded for calibration studies; P(person) reads the share):
+  // More of what stage 1 says (recorded for calibration studies, with RunOptions::stage1_cues;
+  // P(person) reads the share):
   float mask_mean_p = 0;      // its mean probability over the mask's pixels (0 for an empty mask)
   float mask_blob = 0;        // the largest 8-connected blob's share of the mask (0 for an empty mask)
   float mask_score = 0;       // its score for the mask in use (predicted 1 - mean |mask error|)

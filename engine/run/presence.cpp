@@ -229,6 +229,7 @@ std::vector<PresenceSample> presence_samples(const std::string& weights, const s
   std::vector<PresenceSample> out;
   RunOptions opt = run;
   opt.tick_origin_us = 0;
+  opt.stage1_cues = true;
   for (std::size_t i = 0; i < recordings.size(); ++i) {
     const camera::sim::RecordingInfo info = camera::sim::read_recording_info(recordings[i]);
     PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);

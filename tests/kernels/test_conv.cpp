@@ -37,6 +37,10 @@ const Case kCases[] = {
     // layers (8 of 16), a tail of 19 columns, 24 (8 in the second block), a one-block 1x1
     {1, 8, 17, 22, 8, 3, 1, 1},   {2, 5, 6, 19, 8, 3, 1, 1},    {1, 16, 9, 11, 24, 3, 2, 1},
     {1, 9, 5, 13, 4, 1, 1, 0},
+    // a half block after full ones in one tile (40: 2.5 blocks), and alone after a full
+    // group of four (72: 4.5 blocks); the same as input channels (backward-data's output)
+    {1, 10, 9, 21, 40, 3, 1, 1},  {1, 7, 6, 26, 72, 3, 1, 1},   {1, 24, 11, 15, 20, 3, 1, 1},
+    {2, 40, 7, 9, 12, 3, 2, 1},   {1, 72, 5, 8, 3, 3, 1, 1},
 };
 
 struct Run {
@@ -261,7 +265,10 @@ TEST_CASE("Winograd F(4,3) inference path stays within its documented error", "[
   double worst_seen = 0;
   for (const Case& c : {Case{1, 1, 1, 1, 1, 3, 1, 1}, Case{1, 3, 7, 5, 13, 3, 1, 1}, Case{2, 17, 7, 5, 3, 3, 1, 1},
                         Case{1, 13, 33, 44, 17, 3, 1, 1}, Case{1, 5, 9, 9, 7, 3, 1, 0}, Case{1, 64, 65, 87, 64, 3, 1, 1},
-                        Case{1, 128, 33, 44, 128, 3, 1, 1}}) {
+                        Case{1, 128, 33, 44, 128, 3, 1, 1},
+                        // half last blocks: beside full ones (24, 40), alone after a group (72)
+                        Case{1, 24, 13, 19, 24, 3, 1, 1}, Case{1, 20, 9, 23, 40, 3, 1, 1},
+                        Case{1, 9, 11, 14, 72, 3, 1, 1}}) {
     const ConvShape s = shape_of(c);
     REQUIRE(winograd_applicable(s));
     const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 51);
