@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
-#include <random>
 #include <set>
 #include <utility>
 
@@ -139,101 +138,6 @@ TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at t
     CHECK(lost == 0);
     CHECK(more > 0);
   }
-}
-
-TEST_CASE("grow_mask: a pixel is kept when one within r of it (a square) was, on odd shapes", "[run]") {
-  std::mt19937 rng(7);
-  for (const auto& [h, w] : {std::pair{1, 1}, {5, 3}, {7, 11}, {13, 2}, {9, 17}})
-    for (const int r : {0, 1, 2, 4, 20}) {
-      INFO(h << " x " << w << ", r " << r);
-      std::vector<float> m(std::size_t(h) * w);
-      for (auto& v : m) v = rng() % 9 == 0 ? 1.f : 0.f;
-      std::vector<float> got = m;
-      yelan::input::grow_mask(got, h, w, r);
-      for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-          float want = 0;
-          for (int yy = std::max(0, y - r); yy <= std::min(h - 1, y + r); ++yy)
-            for (int xx = std::max(0, x - r); xx <= std::min(w - 1, x + r); ++xx) want = std::max(want, m[std::size_t(yy) * w + xx]);
-          REQUIRE(got[std::size_t(y) * w + x] == want);
-        }
-    }
-  // The pipeline boxes a grown mask by growing the mask's box: the same box, clipped.
-  for (const int r : {0, 1, 3}) {
-    std::vector<float> m(7 * 11, 0.f);
-    m[2 * 11 + 1] = m[4 * 11 + 8] = 1;
-    yelan::input::grow_mask(m, 7, 11, r);
-    int x0 = 11, y0 = 7, x1 = 0, y1 = 0;
-    for (int y = 0; y < 7; ++y)
-      for (int x = 0; x < 11; ++x)
-        if (m[std::size_t(y) * 11 + x] != 0) x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
-    CHECK(x0 == std::max(1 - r, 0));
-    CHECK(y0 == std::max(2 - r, 0));
-    CHECK(x1 == std::min(9 + r, 11));
-    CHECK(y1 == std::min(5 + r, 7));
-  }
-  // One pixel grows into a (2r + 1)-square, clipped at the border.
-  std::vector<float> one(7 * 9, 0.f);
-  one[3 * 9 + 1] = 1;
-  yelan::input::grow_mask(one, 7, 9, 2);
-  CHECK(std::count(one.begin(), one.end(), 1.f) == 5 * 4);
-  std::vector<float> wrong(10);
-  CHECK_THROWS_AS(yelan::input::grow_mask(wrong, 3, 3, 1), std::invalid_argument);
-  CHECK_THROWS_AS(yelan::input::grow_mask(one, 7, 9, -1), std::invalid_argument);
-}
-
-TEST_CASE("mask_cut_all: every channel's mask_cut, kept count and box in one pass", "[run]") {
-  // 21 channels: a full block and five of the next; the padding lanes hold large logits that
-  // must never be read as masks. Channel 3 keeps nothing, channel 19 everything.
-  yelan::layers::ActBuf buf;
-  const yelan::layers::Act a = buf.get(2, 21, 7, 11);
-  std::mt19937 rng(11);
-  std::normal_distribution<float> logit(-2.f, 2.f);
-  for (int n = 0; n < 2; ++n)
-    for (int cb = 0; cb < 2; ++cb)
-      for (std::size_t i = 0; i < a.pixels(); ++i)
-        for (int l = 0; l < 16; ++l) {
-          const int c = cb * 16 + l;
-          float& v = a.data[((std::size_t(n) * 2 + cb) * a.pixels() + i) * 16 + l];
-          v = c >= 21 ? 10.f : c == 3 ? -20.f : c == 19 ? 20.f : logit(rng);
-        }
-  for (const int first : {0, 1, 17})
-    for (const float cut : {0.1f, 0.5f}) {
-      INFO("first " << first << ", cut " << cut);
-      std::vector<std::vector<float>> keep;
-      std::vector<yelan::input::MaskExtent> ext;
-      yelan::input::mask_cut_all(a, 1, cut, keep, ext, first);
-      REQUIRE(keep.size() == 21);
-      REQUIRE(ext.size() == 21);
-      for (int c = 0; c < 21; ++c) {
-        INFO("channel " << c);
-        if (c < first) {
-          CHECK(keep[std::size_t(c)].empty());
-          CHECK(ext[std::size_t(c)].kept == 0);
-          continue;
-        }
-        std::vector<float> want;
-        yelan::input::mask_cut(a, 1, c, want, cut);
-        REQUIRE(keep[std::size_t(c)] == want);
-        std::size_t kept = 0;
-        int x0 = a.w, y0 = a.h, x1 = 0, y1 = 0;
-        for (int y = 0; y < a.h; ++y)
-          for (int x = 0; x < a.w; ++x)
-            if (want[std::size_t(y) * a.w + x] != 0)
-              ++kept, x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
-        const auto& e = ext[std::size_t(c)];
-        CHECK(e.kept == kept);
-        if (kept == 0) x0 = y0 = 0;
-        CHECK((e.x0 == x0 && e.y0 == y0 && e.x1 == x1 && e.y1 == y1));
-      }
-      if (first <= 3) CHECK(ext[3].kept == 0);
-      CHECK(ext[19].kept == a.pixels());
-    }
-  std::vector<std::vector<float>> keep;
-  std::vector<yelan::input::MaskExtent> ext;
-  CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 2, 0.5f, keep, ext), std::invalid_argument);
-  CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 1.f, keep, ext), std::invalid_argument);
-  CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 0.5f, keep, ext, 22), std::invalid_argument);
 }
 
 TEST_CASE("run.mask_grow: the true masks a trainer reads grow too; the config refuses a bad value", "[run]") {
