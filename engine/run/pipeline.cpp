@@ -111,7 +111,7 @@ struct PosePipeline::Impl {
   std::vector<std::vector<float>> stage2_masks;
   std::vector<PoseNet::CropBox> stage2_boxes;
   std::vector<char> stage2_grown;  // whether stage2_masks[c] is grown yet
-  std::vector<input::MaskExtent> extents;
+  std::vector<input::MaskExtent> extents, stage2_extents;  // of `masks`, of stage2_masks before growth
   std::vector<float> scores;
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
   int in_use = 0;
@@ -370,18 +370,18 @@ struct PosePipeline::Impl {
       stage2_masks.clear();
       stage2_grown.clear();
       if (cfg.reused_mask_cut() != cfg.mask_cut || cfg.mask_grow > 0) {
-        input::mask_cut_all(m, 0, float(cfg.reused_mask_cut()), stage2_masks, extents, 1);
+        input::mask_cut_all(m, 0, float(cfg.reused_mask_cut()), stage2_masks, stage2_extents, 1);
         if (cfg.mask_grow > 0) {
           stage2_masks[0] = masks[0];
-          extents[0] = input::MaskExtent{0, boxes[0].x0, boxes[0].y0, boxes[0].x1, boxes[0].y1};
+          stage2_extents[0] = extents[0];
         }
         // A mask grown by r has its box grown by r (clipped to the frame); the masks themselves
         // are grown when stage 2 first reads one (stage2_mask), one a tick, not N a run.
         const int r = cfg.mask_grow;
         stage2_boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
         for (int c = 0; c < cfg.n_masks; ++c) {
-          const input::MaskExtent& e = extents[std::size_t(c)];
-          if (e.x1 > e.x0)
+          const input::MaskExtent& e = stage2_extents[std::size_t(c)];
+          if (e.kept > 0)
             stage2_boxes[std::size_t(c)] = {std::max(e.x0 - r, 0), std::max(e.y0 - r, 0), std::min(e.x1 + r, m.w),
                                             std::min(e.y1 + r, m.h)};
         }
