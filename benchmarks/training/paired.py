@@ -2,7 +2,7 @@
 """Two pose nets compared recording by recording on the same frames.
 
     paired.py A.json B.json [A2.json B2.json ...]
-    paired.py --poses [--root | --true-depth] A.csv B.csv [A2.csv B2.csv ...]
+    paired.py --poses [--root | --true-depth] [--common] A.csv B.csv [A2.csv B2.csv ...]
 
 Each pair is two `yelan eval --json` files of the same recordings (their
 by_condition.scene rows), or with --poses two `yelan eval --run --poses` files
@@ -11,7 +11,9 @@ by_condition.scene rows), or with --poses two `yelan eval --run --poses` files
 --true-depth scaled to the true head depth, the paper protocol). The
 differences B - A of all pairs are pooled. Prints their mean with its standard
 error and on how many recordings B is better: a paired difference is far less
-noisy than the two means side by side.
+noisy than the two means side by side. --common scores only the poses both files
+score (the same recording and instant, both saying "person"): a stage 1 that reports a
+person more often is then not charged for the harder poses it adds.
 """
 import csv
 import json
@@ -51,10 +53,13 @@ def pose_errors(path, mode):
                 yield row["source"], int(row["t_us"]), int(row.get("mask_age") or 0), err, n
 
 
-def poses_mpjpe(path, mode):
-    """Per recording, the mean distance over all scored joints (as yelan eval --run pools them)."""
+def poses_mpjpe(path, mode, only=None):
+    """Per recording, the mean distance over all scored joints (as yelan eval --run pools them);
+    only: the (source, t_us) pairs to score, or None for every one."""
     sums = {}
-    for source, _, _, err, n in pose_errors(path, mode):
+    for source, t_us, _, err, n in pose_errors(path, mode):
+        if only is not None and (source, t_us) not in only:
+            continue
         s = sums.setdefault(source, [0.0, 0])
         s[0] += err
         s[1] += n
@@ -69,17 +74,24 @@ def mean_se(values):
 
 
 def main(argv):
-    mode = None
+    mode, common = None, False
     if argv and argv[0] == "--poses":
         mode, argv = "deployed", argv[1:]
         if argv and argv[0] in ("--root", "--true-depth"):
             mode, argv = argv[0][2:], argv[1:]
+        if argv and argv[0] == "--common":
+            common, argv = True, argv[1:]
     if len(argv) < 2 or len(argv) % 2:
         sys.exit(__doc__)
-    read = scene_mpjpe if mode is None else lambda p: poses_mpjpe(p, mode)
     diffs = []
     for a, b in zip(argv[0::2], argv[1::2]):
-        A, B = read(a), read(b)
+        if mode is None:
+            A, B = scene_mpjpe(a), scene_mpjpe(b)
+        else:
+            only = None
+            if common:
+                only = {(s, t) for s, t, *_ in pose_errors(a, mode)} & {(s, t) for s, t, *_ in pose_errors(b, mode)}
+            A, B = poses_mpjpe(a, mode, only), poses_mpjpe(b, mode, only)
         missing = sorted(set(A) ^ set(B))
         if missing:
             sys.exit(f"{a} and {b} score different recordings, e.g. {missing[0]}")

@@ -95,6 +95,24 @@ class PairedTest(unittest.TestCase):
             self.assertEqual(r.returncode, 0, r.stderr)
             self.assertIn("B better on 1", r.stdout)  # r1 -5; r2 a dancer twice as far is far worse
 
+    def test_common_scores_only_the_poses_both_files_score(self):
+        with tempfile.TemporaryDirectory() as d:
+            a, b = os.path.join(d, "a.csv"), os.path.join(d, "b.csv")
+            z = TRUTH[0][2]
+            # A says nobody on r1's second pose and on all of r2; B scores them, badly (30 mm).
+            # On their common pose B is 5 mm better (5 against 10).
+            write_poses(a, [("r1", 1, moved(TRUTH, (10, 0, 0)), TRUTH, z), ("r1", 0, None, TRUTH, -1),
+                            ("r2", 0, None, TRUTH, -1)])
+            write_poses(b, [("r1", 1, moved(TRUTH, (5, 0, 0)), TRUTH, z), ("r1", 1, moved(TRUTH, (30, 0, 0)), TRUTH, z),
+                            ("r2", 1, moved(TRUTH, (30, 0, 0)), TRUTH, z)])
+            r = self.run_paired("--poses", a, b)
+            self.assertNotEqual(r.returncode, 0)  # r2 scored by B alone
+            self.assertIn("score different recordings", r.stderr)
+            r = self.run_paired("--poses", "--common", a, b)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            self.assertIn("1 recordings: B - A = -5.0 +- nan mm", r.stdout)
+            self.assertIn("B better on 1", r.stdout)
+
     def test_mask_age_pairs_poses_by_time_and_groups_them_by_the_age_of_the_mask(self):
         with tempfile.TemporaryDirectory() as d:
             exit_, every, svg = os.path.join(d, "x.csv"), os.path.join(d, "e.csv"), os.path.join(d, "age.svg")
