@@ -18,6 +18,12 @@ void require_fills(int channels, int sensor_w, int sensor_h, const layers::Act& 
                                 std::to_string(a.w) + "x" + std::to_string(a.h) + " at downscale " + std::to_string(d));
 }
 
+// The logit a sigmoid cut in (0, 1) corresponds to: comparing logits spares a sigmoid a pixel.
+float logit_of_cut(float cut, const char* who) {
+  if (!(cut > 0 && cut < 1)) throw std::invalid_argument(std::string(who) + ": the cut must lie in (0, 1)");
+  return std::log(cut / (1 - cut));
+}
+
 }  // namespace
 
 void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, int d, const layers::Act& a, int n) {
@@ -74,8 +80,7 @@ void tore_input(const camera::ToreVolume& tore, std::int64_t t, int d, const lay
 
 void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>& keep, float cut) {
   if (channel < 0 || channel >= logits.c || n < 0 || n >= logits.n) throw std::invalid_argument("mask_cut: no such frame or channel");
-  if (!(cut > 0 && cut < 1)) throw std::invalid_argument("mask_cut: the cut must lie in (0, 1)");
-  const float logit_cut = std::log(cut / (1 - cut));
+  const float logit_cut = logit_of_cut(cut, "mask_cut");
   keep.resize(logits.pixels());
   const float* p = logits.data + (std::size_t(n) * logits.cb() + channel / 16) * logits.pixels() * 16 + channel % 16;
   for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = p[i * 16] > logit_cut ? 1.f : 0.f;
@@ -84,8 +89,7 @@ void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>&
 void mask_cut_all(const layers::Act& logits, int n, float cut, std::vector<std::vector<float>>& keep,
                   std::vector<MaskExtent>& extent, int first) {
   if (n < 0 || n >= logits.n || first < 0 || first > logits.c) throw std::invalid_argument("mask_cut_all: no such frame or channel");
-  if (!(cut > 0 && cut < 1)) throw std::invalid_argument("mask_cut_all: the cut must lie in (0, 1)");
-  const float logit_cut = std::log(cut / (1 - cut));
+  const float logit_cut = logit_of_cut(cut, "mask_cut_all");
   const std::size_t P = logits.pixels();
   keep.resize(std::size_t(logits.c));
   extent.assign(std::size_t(logits.c), MaskExtent{0, logits.w, logits.h, 0, 0});
