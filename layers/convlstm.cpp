@@ -60,8 +60,7 @@ void WindowConvLSTM::run_direction(const Act& x, int dir) {
       if (k == 0 && carried) {
         copy_channels(Act{carry_h_.data(), 1, hidden_, x.h, x.w}, 0, 0, cat, b, in_, hidden_);
       } else if (k == 0) {
-        for (int c = 0; c < hidden_; ++c)
-          for (std::size_t p = 0; p < cat.pixels(); ++p) *lane_ptr(cat, b, in_ + c, p) = 0.f;
+        zero_channels(cat, b, in_, hidden_);
       } else {
         const int tp = dir == 0 ? t - 1 : t + 1;
         copy_channels(steps[tp].h.get(B_, hidden_, x.h, x.w), b, 0, cat, b, in_, hidden_);
@@ -145,9 +144,7 @@ void WindowConvLSTM::back_direction(const Act& x, const Act& dfin, int dir, cons
     const Act dcat = dcat_.like(cat);
     cell_.backward(cat, dgates, &dcat);
     for (int b = 0; b < B_; ++b) {
-      // dx of frame (b, t) += dcat's x part; dh_next = dcat's h part
-      for (int c = 0; c < in_; ++c)
-        for (std::size_t p = 0; p < x.pixels(); ++p) *lane_ptr(dx, b * S_ + t, c, p) += *lane_ptr(dcat, b, c, p);
+      add_channels(dcat, b, 0, dx, b * S_ + t, 0, in_);  // dcat's x part into frame (b, t)'s dx
       copy_channels(dcat, b, in_, dh_next, b, 0, hidden_);
     }
     std::memcpy(dc_next.data, dc_prev.data, dc_prev.floats() * sizeof(float));

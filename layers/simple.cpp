@@ -30,30 +30,51 @@ void zero_padding(const Act& y) {
   }
 }
 
-}  // namespace
-
-float* lane_ptr(const Act& a, int n, int c, std::size_t px) { return a.lane(n, c, px); }
-
-// Runs that cross no block boundary on either side: whole blocks are one memcpy, and a U-Net's
-// 24 + 24 channels move 8 or 16 lanes a pixel instead of one. A run that ends both maps (same
-// lane offset) takes the source's zero padding lanes along, so the destination's stay zero.
-void copy_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count) {
-  const std::size_t P = src.pixels();
-  const bool ends_both = s0 + count == src.c && d0 + count == dst.c;
+// Channels [s0, s0 + count) of image sn of src beside [d0, d0 + count) of image dn of dst, in
+// runs that cross no block boundary on either side: run(s, d, lanes) at pixel 0 of each run.
+// With `widen`, a run that ends both maps (same lane offset) covers the padding lanes too.
+template <class Run>
+void channel_runs(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count, bool widen, Run run) {
+  const bool ends_both = widen && s0 + count == src.c && d0 + count == dst.c;
   while (count > 0) {
     const int len = std::min({count, 16 - s0 % 16, 16 - d0 % 16});
     const int lanes = len == count && ends_both && s0 % 16 == d0 % 16 ? 16 - s0 % 16 : len;
-    const float* s = lane_ptr(src, sn, s0, 0);
-    float* d = lane_ptr(dst, dn, d0, 0);
-    if (lanes == 16) {
-      std::memcpy(d, s, P * 16 * sizeof(float));
-    } else {
-      for (std::size_t p = 0; p < P; ++p) std::copy_n(s + p * 16, lanes, d + p * 16);
-    }
+    run(lane_ptr(src, sn, s0, 0), lane_ptr(dst, dn, d0, 0), lanes);
     s0 += len;
     d0 += len;
     count -= len;
   }
+}
+
+}  // namespace
+
+float* lane_ptr(const Act& a, int n, int c, std::size_t px) { return a.lane(n, c, px); }
+
+// Whole blocks are one memcpy, and a U-Net's 24 + 24 channels move 8 or 16 lanes a pixel
+// instead of one. A run that ends both maps takes the source's zero padding lanes along, so
+// the destination's stay zero.
+void copy_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count) {
+  const std::size_t P = src.pixels();
+  channel_runs(src, sn, s0, dst, dn, d0, count, true, [P](const float* s, float* d, int lanes) {
+    if (lanes == 16) std::memcpy(d, s, P * 16 * sizeof(float));
+    else
+      for (std::size_t p = 0; p < P; ++p) std::copy_n(s + p * 16, lanes, d + p * 16);
+  });
+}
+
+void add_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count) {
+  const std::size_t P = src.pixels();
+  channel_runs(src, sn, s0, dst, dn, d0, count, false, [P](const float* s, float* d, int lanes) {
+    for (std::size_t p = 0; p < P; ++p)
+      for (int l = 0; l < lanes; ++l) d[p * 16 + l] += s[p * 16 + l];
+  });
+}
+
+void zero_channels(const Act& a, int n, int c0, int count) {
+  const std::size_t P = a.pixels();
+  channel_runs(a, n, c0, a, n, c0, count, false, [P](const float*, float* d, int lanes) {
+    for (std::size_t p = 0; p < P; ++p) std::fill_n(d + p * 16, lanes, 0.f);
+  });
 }
 
 void activation_forward(Activation a, const Act& x, const Act& y) {

@@ -57,6 +57,9 @@ float* lane_ptr(const Act& a, int n, int c, std::size_t px);
 // Channels [s0, s0 + count) of image sn of src to [d0, d0 + count) of image dn of dst (same
 // pixels, any channel offsets and counts).
 void copy_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count);
+// The same channels added into dst (dst += src), and channels of one image set to zero.
+void add_channels(const Act& src, int sn, int s0, const Act& dst, int dn, int d0, int count);
+void zero_channels(const Act& a, int n, int c0, int count);
 
 // Channel concatenation [a, b] -> y and its backward split (any channel counts).
 void concat_channels(const Act& a, const Act& b, const Act& y);

@@ -257,6 +257,23 @@ TEST_CASE("activations, pooling, linear and concatenation: gradients by finite d
           else REQUIRE(got == 7.f);
         }
   }
+  // add_channels and zero_channels touch the named lanes only, padding included (the ConvLSTM's
+  // dx += dcat's x part, and its first step's zero h).
+  for (auto [s0, d0, count, c_dst] : {std::array{5, 21, 14, 40}, std::array{3, 19, 16, 35}, std::array{0, 16, 19, 35}}) {
+    INFO(count << " channels from " << s0 << " to " << d0 << " of " << c_dst);
+    Owned src(3, s0 + count, 2, 3, 37), dst(2, c_dst, 2, 3), zeroed(2, c_dst, 2, 3);
+    std::fill_n(dst.mem.data(), dst.act.floats(), 7.f);
+    std::fill_n(zeroed.mem.data(), zeroed.act.floats(), 7.f);
+    add_channels(src.act, 2, s0, dst.act, 1, d0, count);
+    zero_channels(zeroed.act, 1, d0, count);
+    for (int n = 0; n < 2; ++n)
+      for (int c = 0; c < dst.act.cb() * 16; ++c)
+        for (std::size_t p = 0; p < 6; ++p) {
+          const bool named = n == 1 && c >= d0 && c < d0 + count;
+          REQUIRE(*lane_ptr(dst.act, n, c, p) == (named ? 7.f + *lane_ptr(src.act, 2, c - d0 + s0, p) : 7.f));
+          REQUIRE(*lane_ptr(zeroed.act, n, c, p) == (named ? 0.f : 7.f));
+        }
+  }
 }
 
 TEST_CASE("avg_pool and bilinear resize: PyTorch's values, and each backward the forward's adjoint", "[layers][resample]") {

@@ -583,6 +583,17 @@ case "$what" in
     mkdir -p "$DATA_MASK_MIX/train" "$DATA_MASK_MIX/val"
     ln -f "$DATA_FPR_MIX"/train/*.yelan.h5 "$DATA_NEG"/train/*.yelan.h5 "$DATA_MASK_MIX/train/"
     ln -f "$DATA_SK_FP2"/val/*.yelan.h5 "$DATA_NEG"/val/*.yelan.h5 "$DATA_MASK_MIX/val/" ;;
+  # Everything the runs since the thirty-second session read, made from nothing (the thirty-
+  # fourth session's machine had an empty /var/tmp): sk-src's validation dancers (the cast's
+  # own cue; members are drawn by seed, split and index, so --train 0 leaves them as they
+  # were), sk-src-fp2, sk-fpr and its mix, sk-neg and sk-mask-mix. Every step resumes.
+  data-s34)
+    "$Y" sim --dataset "$DATA_SK_SRC" --seed 1 --train 0 --val 32 --test 0 --train-empty 0 --val-empty 0 --duration 5s \
+      --random-looks --frame-dancer --train-rooms 0 --val-rooms 0 --train-dancer-rooms 0 --val-dancer-rooms 24 \
+      --free-arms 0.5 --threads "${THREADS:-2}"
+    "$0" ev-data-fp2
+    "$0" ev-data-fpr
+    "$0" ev-data-neg ;;
   # mask-s32: the shipped stage 1 fine-tuned on sk-mask-mix with mask-s16's recipe (batch 32,
   # one mask frame, 15 windows a visit, mirrored, lr 1e-4 cosine).
   train-mask-s32)
@@ -677,9 +688,11 @@ case "$what" in
       --mask-weights models/default.h5 --mask-reuse 16 ;;
   # save: the runs' state into models/campaign/ for a commit (run.json, log.csv, and where
   # small enough the checkpoint: a few MB); restore: back into $RUNS on a new machine.
+  # Every run in $RUNS (a fixed list here once left mask-s32 out, and a new machine lost it).
   save)
-    for run in pose-p0125 pose-small pose-looks pose-looks-nomask pose-looks-nomask2 pose-small-looks pose-small-nomask pose-full-nomask pose-s3 pose-s5 pose-s5-warp mask-p0125 mask-neg mask-s2 mask-looks mask-looks2 mask-s3 mask-s4 mask-s5 mask-s6 mask-s7 mask-s7-empty mask-s8 mask-s9 mask-s10 mask-s10-wpv15 mask-s11 mask-s12 mask-s15 pose-s17 pose-s17-s4 pose-s18-remix pose-s18-ctl pose-s19-netmask pose-s19-truemask pose-s20-truemask pose-s20-netmask pose-s21-reuse pose-s22-reuse pose-s23-remix mask-s16 pose-s24-free pose-s25-wide fit-n64; do
-      [ -d "$RUNS/$run" ] || continue
+    for dir in "$RUNS"/*/; do
+      run=$(basename "$dir")
+      [ -f "$RUNS/$run/run.json" ] || continue
       # A run restarted from scratch on a new machine must not overwrite a longer history.
       if [ -f "models/campaign/$run/log.csv" ] && [ -f "$RUNS/$run/log.csv" ] &&
          [ "$(wc -l < "$RUNS/$run/log.csv")" -lt "$(wc -l < "models/campaign/$run/log.csv")" ]; then
@@ -705,6 +718,10 @@ case "$what" in
       # since a lost checkpoint cost 2.2 CPU-hours once (pose-small-looks).
       if [ "$size" -le $((12 << 20)) ]; then
         cp "$RUNS/$run/checkpoint.h5" "$RUNS/$run/checkpoint.state" "models/campaign/$run/"
+      elif [ -f "$RUNS/$run/final.h5" ] && [ "$(stat -c %s "$RUNS/$run/final.h5")" -le $((12 << 20)) ]; then
+        # A finished run's weights without its Adam moments: it cannot resume, but it is not lost.
+        cp "$RUNS/$run/final.h5" "models/campaign/$run/"
+        echo "$run: checkpoint and state are $((size >> 20)) MiB: only final.h5 copied" >&2
       else
         echo "$run: checkpoint and state are $((size >> 20)) MiB: not copied (it resumes from $RUNS on this machine)" >&2
       fi
