@@ -151,4 +151,34 @@ void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep) {
   }
 }
 
+void mask_stage2_input(const layers::Act& a, int n, const std::vector<float>& keep, bool outside, int margin) {
+  if (!outside) return apply_mask(a, n, keep);
+  const int c = a.c / 2, H = a.h, W = a.w;
+  if (a.c % 2 || a.cb() != 1 || keep.size() != a.pixels())
+    throw std::invalid_argument("outside input: " + std::to_string(a.c) + " channels of " + std::to_string(W) + "x" +
+                                std::to_string(H) + " behind a mask of " + std::to_string(keep.size()) +
+                                " pixels (needs an even count of at most 16, and one mask value a pixel)");
+  int x0 = 0, y0 = 0, x1 = W, y1 = H;  // the region whose outside events stage 2 reads
+  if (margin > 0) {
+    x0 = W, y0 = H, x1 = 0, y1 = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x)
+        if (keep[std::size_t(y) * W + x] != 0.f)
+          x0 = std::min(x0, x), x1 = std::max(x1, x + 1), y0 = std::min(y0, y), y1 = std::max(y1, y + 1);
+    if (x1 == 0) x0 = y0 = 0;  // nobody: no region (as an empty crop)
+    else x0 = std::max(x0 - margin, 0), y0 = std::max(y0 - margin, 0), x1 = std::min(x1 + margin, W), y1 = std::min(y1 + margin, H);
+  }
+  float* p = a.data + std::size_t(n) * a.pixels() * 16;
+  for (int y = 0; y < H; ++y)
+    for (int x = 0; x < W; ++x) {
+      float* v = p + (std::size_t(y) * W + x) * 16;
+      const float k = keep[std::size_t(y) * W + x];
+      const bool in_region = x >= x0 && x < x1 && y >= y0 && y < y1;
+      for (int l = 0; l < c; ++l) {
+        v[c + l] = in_region ? v[l] * (1.f - k) : 0.f;
+        v[l] *= k;
+      }
+    }
+}
+
 }  // namespace yelan::input

@@ -53,4 +53,11 @@ void grow_mask(std::vector<float>& keep, int h, int w, int r);
 // Frame n of `a` multiplied, every channel, by one value per pixel.
 void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep);
 
+// Stage 2's input from frame n of `a`, whose first channels hold the TORE, behind a binarised
+// mask: without `outside`, apply_mask. With it (pose.outside_input: a.c is twice the TORE's
+// channels, one block), channels [c, 2c) become the TORE where the mask is not, inside the
+// mask's bounding box grown by `margin` pixels and clipped to the frame (the whole frame at
+// margin 0: stage 2's crop), zero elsewhere, and channels [0, c) the TORE where it is.
+void mask_stage2_input(const layers::Act& a, int n, const std::vector<float>& keep, bool outside, int margin);
+
 }  // namespace yelan::input

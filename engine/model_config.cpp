@@ -85,6 +85,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.convlstm = mode != "none";
   c.masked_input = get_bool_or(p, where + ".pose", "masked_input", true);
   c.mask_role = m.contains("role") ? get_str(m, where + ".mask", "role") : c.masked_input ? "mask" : "none";
+  c.outside_input = get_bool_or(p, where + ".pose", "outside_input", false);
   c.crop_margin = p.contains("crop_margin") ? get_int(p, where + ".pose", "crop_margin") : 0;
   c.head_stride = p.contains("head_stride") ? get_int(p, where + ".pose", "head_stride") : 8;
   c.hourglass_skip = get_bool_or(p, where + ".pose", "hourglass_skip", false);
@@ -122,6 +123,8 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
        "mask.role must be mask, presence or none"},
       {(c.mask_role == "mask") == c.masked_input,
        "mask.role mask goes with pose.masked_input true, presence and none with false"},
+      {!c.outside_input || c.masked_input, "pose.outside_input needs pose.masked_input (a mask to be outside of)"},
+      {!c.outside_input || 2 * c.channels <= 16, "pose.outside_input needs input.channels <= 8 (one channel block)"},
       {c.mask_width > 0 && c.pose_width > 0, "width_mult must be > 0"},
       {c.n_masks >= 1 && c.hidden >= 1 && c.stages >= 1 && c.joints >= 1,
        "n_masks, hidden, stages and joints must be >= 1"},

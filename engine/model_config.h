@@ -25,6 +25,13 @@ struct ModelConfig {
   bool bidirectional = true;
   bool convlstm = true;       // pose.convlstm "none": the skip block sees the head's features alone
   bool masked_input = true;   // pose.masked_input false: stage 2 sees the whole input
+  // pose.outside_input (not the paper's; default false, needs masked_input): stage 2 reads
+  // the input twice, [inside the mask | outside it], 2 x channels in all, the outside part
+  // only within the mask's box grown by crop_margin (the crop stage 2 reads; the whole frame
+  // at crop_margin 0). A mask that misses a limb no longer hides its events, and a net
+  // widened from a gated one (zero weights on the new channels) starts with its outputs.
+  bool outside_input = false;
+  int pose_channels() const { return outside_input ? 2 * channels : channels; }
   // mask.role: what stage 1 is for. "mask" (the default with masked_input): stage 2 reads the
   // masked TORE. "presence" (needs masked_input false): stage 1 still runs, with early exit,
   // to say whether anyone is there, and stage 2 reads the whole TORE (a mask net's errors

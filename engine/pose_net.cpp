@@ -20,7 +20,7 @@ PoseNet::PoseNet(const ModelConfig& cfg)
     : cfg_(cfg),
       mid_h_(conv_out(conv_out(conv_out(cfg.height(), 7, 2, 3), 3, 2, 1), 3, layer2_stride(cfg), 1)),
       mid_w_(conv_out(conv_out(conv_out(cfg.width(), 7, 2, 3), 3, 2, 1), 3, layer2_stride(cfg), 1)),
-      conv1_({cfg.channels, cfg.resnet_c64(), 7, 2, 3}),
+      conv1_({cfg.pose_channels(), cfg.resnet_c64(), 7, 2, 3}),
       bn1_(cfg.resnet_c64(), true),
       pool_(3, 2, 1),
       cl_(cfg.resnet_mid(), cfg.hidden, cfg.bidirectional),
@@ -42,9 +42,9 @@ PoseNet::PoseNet(const ModelConfig& cfg)
 }
 
 void PoseNet::check_input(const Act& x) const {
-  if (x.c != cfg_.channels || x.h != cfg_.height() || x.w != cfg_.width())
+  if (x.c != cfg_.pose_channels() || x.h != cfg_.height() || x.w != cfg_.width())
     throw std::invalid_argument("pose net '" + cfg_.name + "': input is " + std::to_string(x.c) + "x" + std::to_string(x.h) +
-                                "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.channels) + "x" +
+                                "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.pose_channels()) + "x" +
                                 std::to_string(cfg_.height()) + "x" + std::to_string(cfg_.width()));
 }
 

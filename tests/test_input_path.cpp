@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <memory>
 #include <set>
 #include <utility>
@@ -78,6 +79,33 @@ std::pair<std::size_t, std::size_t> lost_and_gained(const std::vector<float>& be
   return {lost, gained};
 }
 
+// `yelan run` over the recording, its stage-2 input at each of the window's S frame times
+// checked against that frame of `batch`, value for value; returns how many frames it met.
+int frames_matching(const std::string& w, const std::string& rec, const yelan::run::RunOptions& ro, const sim::SimWindow& win,
+                    int S, const yelan::layers::Act& batch) {
+  yelan::run::PosePipeline pipe(w, 346, 260, ro);
+  auto reader = yelan::camera::open_event_file(rec);
+  std::vector<yelan::camera::Event> ev;
+  int matched = 0;
+  const std::size_t per_frame = std::size_t(batch.cb()) * batch.pixels() * 16;
+  auto on_pose = [&](const yelan::run::Pose& p) {
+    for (int t = 0; t < S; ++t) {
+      if (p.t_us != win.frames[std::size_t(t)].t_us) continue;
+      const yelan::layers::Act& in = pipe.last_input();
+      REQUIRE(in.c == batch.c);
+      REQUIRE(std::size_t(in.cb()) * in.pixels() * 16 == per_frame);
+      INFO("frame " << t << " at " << p.t_us << " us");
+      CHECK(std::memcmp(in.data, batch.data + std::size_t(t) * per_frame, per_frame * sizeof(float)) == 0);
+      ++matched;
+    }
+  };
+  while (reader->read(ev, 1 << 15) > 0) {
+    pipe.push(ev, on_pose);
+    ev.clear();
+  }
+  return matched;
+}
+
 }  // namespace
 
 TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at the same instant", "[run]") {
@@ -103,26 +131,8 @@ TEST_CASE("input path: the trainer's batch equals yelan run's stage-2 input at t
     ro.skip_empty = false;
     ro.mask_grow = grow;
     if (grow) ro.mask_cut = cfg.mask_cut;
-    yelan::run::PosePipeline pipe(w, 346, 260, ro);
-    auto reader = yelan::camera::open_event_file(rec);
-    std::vector<yelan::camera::Event> ev;
-    int matched = 0;
+    CHECK(frames_matching(w, rec, ro, win, cfg.window, batch) == cfg.window);
     const std::size_t per_frame = std::size_t(batch.cb()) * batch.pixels() * 16;
-    auto on_pose = [&](const yelan::run::Pose& p) {
-      for (int t = 0; t < cfg.window; ++t) {
-        if (p.t_us != win.frames[std::size_t(t)].t_us) continue;
-        const yelan::layers::Act& in = pipe.last_input();
-        REQUIRE(std::size_t(in.cb()) * in.pixels() * 16 == per_frame);
-        INFO("frame " << t << " at " << p.t_us << " us");
-        CHECK(std::memcmp(in.data, batch.data + std::size_t(t) * per_frame, per_frame * sizeof(float)) == 0);
-        ++matched;
-      }
-    };
-    while (reader->read(ev, 1 << 15) > 0) {
-      pipe.push(ev, on_pose);
-      ev.clear();
-    }
-    CHECK(matched == cfg.window);
     // And the input is not trivially equal: the mask cut something and kept something.
     double sum = 0;
     for (std::size_t i = 0; i < per_frame; ++i) sum += batch.data[i];
@@ -246,4 +256,142 @@ TEST_CASE("mask reuse: periods drawn over 1..N, phases below the period", "[run]
   }
   CHECK(seen.size() == 10);  // 1 + 2 + 3 + 4 (period, phase) pairs
   CHECK_THROWS_AS(yelan::train::draw_mask_reuse(r, 0), std::invalid_argument);
+}
+
+namespace {
+
+// micro with pose.outside_input (and a crop margin), initialised with the fixture's seed (the
+// same mask net: its architecture is micro's).
+std::string outside_weights(RecordingFixture& fx, int crop_margin) {
+  std::string text = fx.nets->cfg.json;
+  const std::size_t at = text.find("\"convlstm\": \"causal\"");
+  REQUIRE(at != std::string::npos);
+  text.insert(at, "\"outside_input\": true, \"crop_margin\": " + std::to_string(crop_margin) + ", ");
+  const std::string cfg_path = fx.d / ("outside" + std::to_string(crop_margin) + ".json");
+  const std::string w = fx.d / ("outside" + std::to_string(crop_margin) + ".h5");
+  std::ofstream(cfg_path) << text;
+  const auto init = yelan::test::run_cli({"weights", "init", "--config", cfg_path, "-o", w, "--seed", "4"});
+  INFO(init.err);
+  REQUIRE(init.code == 0);
+  return w;
+}
+
+// Every stage-2 input `yelan run` builds on the recording, one vector a tick.
+std::vector<std::vector<float>> run_inputs(const std::string& w, const std::string& rec, const yelan::run::RunOptions& ro,
+                                           std::uint64_t* box_ticks = nullptr) {
+  yelan::run::PosePipeline pipe(w, 346, 260, ro);
+  auto reader = yelan::camera::open_event_file(rec);
+  std::vector<yelan::camera::Event> ev;
+  std::vector<std::vector<float>> inputs;
+  auto on_pose = [&](const yelan::run::Pose&) {
+    const yelan::layers::Act& in = pipe.last_input();
+    inputs.emplace_back(in.data, in.data + std::size_t(in.cb()) * in.pixels() * 16);
+  };
+  while (reader->read(ev, 1 << 15) > 0) {
+    pipe.push(ev, on_pose);
+    ev.clear();
+  }
+  if (box_ticks) *box_ticks = pipe.stats().tore_box_ticks;
+  return inputs;
+}
+
+}  // namespace
+
+TEST_CASE("pose.outside_input: inside and outside the true mask, the outside part ending at the crop", "[run]") {
+  RecordingFixture fx;
+  const sim::SimWindow win = fx.window(11, 0);
+  for (const int margin : {0, 3}) {
+    INFO("crop margin " << margin);
+    const std::string w = outside_weights(fx, margin);
+    const yelan::ModelConfig cfg = yelan::weights::LoadedNetworks(yelan::weights::load_weights(w), w).cfg;
+    REQUIRE(cfg.pose_channels() == 2 * cfg.channels);
+    yelan::train::BatchBuilder builder(cfg, 1, yelan::train::MaskSource::truth);
+    builder.add(win, fx.nets->mask, nullptr);
+    const yelan::layers::Act& batch = builder.batch().input.act;
+    REQUIRE(batch.c == 2 * cfg.channels);
+    const std::size_t per_frame = std::size_t(batch.cb()) * batch.pixels() * 16;
+    // By hand: inside = TORE x mask, outside = TORE x (1 - mask) in the mask's box grown by
+    // the margin (the whole frame at 0), zero elsewhere; a cell is the dancer's when any of
+    // its sensor pixels is.
+    const int t = cfg.window - 1, W = cfg.width(), H = cfg.height(), d = cfg.downscale;
+    yelan::layers::ActBuf one;
+    one.resize(1, cfg.channels, H, W);
+    const auto& f = win.frames[std::size_t(t)];
+    yelan::input::downscale_tore(f.tore, cfg.sensor_height, cfg.sensor_width, d, one.act, 0);
+    std::vector<float> keep(std::size_t(H) * W, 0.f);
+    int x0 = W, y0 = H, x1 = 0, y1 = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x)
+        for (int dy = 0; dy < d; ++dy)
+          for (int dx = 0; dx < d; ++dx)
+            if (f.mask[std::size_t(y * d + dy) * cfg.sensor_width + x * d + dx]) {
+              keep[std::size_t(y) * W + x] = 1;
+              x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
+            }
+    REQUIRE(x1 > 0);
+    std::size_t inside_kept = 0, outside_kept = 0, beyond = 0;
+    for (int y = 0; y < H; ++y)
+      for (int x = 0; x < W; ++x) {
+        const std::size_t p = std::size_t(y) * W + x;
+        const bool region = margin == 0 || (x >= x0 - margin && x < x1 + margin && y >= y0 - margin && y < y1 + margin);
+        beyond += !region;
+        const float* got = batch.data + std::size_t(t) * per_frame + p * 16;
+        for (int c = 0; c < cfg.channels; ++c) {
+          const float v = one.act.data[p * 16 + c], k = keep[p];
+          REQUIRE(got[c] == v * k);
+          REQUIRE(got[cfg.channels + c] == (region ? v * (1 - k) : 0.f));
+          inside_kept += k == 1 && v != 0;
+          outside_kept += region && k == 0 && v != 0;
+        }
+      }
+    CHECK(inside_kept > 0);
+    CHECK(outside_kept > 0);                // the outside part holds events
+    CHECK((margin == 0) == (beyond == 0));  // and, with a margin, ends at the crop
+  }
+}
+
+TEST_CASE("pose.outside_input: the trainer's batch equals yelan run's input; reading the TORE in the box changes nothing", "[run]") {
+  RecordingFixture fx;
+  const sim::SimWindow win = fx.window(11, 0);
+  for (const int margin : {0, 3}) {
+    INFO("crop margin " << margin);
+    const std::string w = outside_weights(fx, margin);
+    yelan::ModelConfig cfg = yelan::weights::LoadedNetworks(yelan::weights::load_weights(w), w).cfg;
+    cfg.mask_cut = fx.quantile_cut(win, cfg.window - 1, 0, 0.8);  // the mask net is the fixture's (same seed)
+    yelan::train::BatchBuilder builder(cfg, 1, yelan::train::MaskSource::net);
+    builder.add(win, fx.nets->mask, nullptr);
+    const yelan::layers::Act& batch = builder.batch().input.act;
+    REQUIRE(batch.c == 2 * cfg.channels);
+    yelan::run::RunOptions ro;
+    ro.beta = 2;  // stage 1 on every tick, as the builder's fresh masks
+    ro.tick_origin_us = 0;
+    ro.skip_empty = false;
+    ro.mask_cut = cfg.mask_cut;
+    CHECK(frames_matching(w, fx.rec, ro, win, cfg.window, batch) == cfg.window);
+  }
+  // Early exit with a trained stage 1 (the shipped one, its masks on the dancer alone): stage 2
+  // alone reads the TORE in its crop box between stage 1's runs, and its input is on every
+  // tick what reading the whole sensor gives (no stale events outside the mask).
+  const std::string shipped = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::string text = yelan::weights::load_weights(shipped).config_json;
+  const std::size_t at = text.find("\"convlstm\"");
+  REQUIRE(at != std::string::npos);
+  text.insert(at, "\"outside_input\": true, ");
+  const std::string cfg_path = fx.d / "shipped-outside.json", w = fx.d / "shipped-outside.h5";
+  std::ofstream(cfg_path) << text;
+  const auto widen = yelan::test::run_cli({"weights", "widen", "--weights", shipped, "--config", cfg_path, "-o", w});
+  INFO(widen.err);
+  REQUIRE(widen.code == 0);
+  yelan::run::RunOptions ro;
+  ro.tick_origin_us = 0;
+  std::uint64_t box_ticks = 0;
+  const auto boxed = run_inputs(w, fx.rec, ro, &box_ticks);
+  ro.tore_box = false;
+  const auto whole = run_inputs(w, fx.rec, ro);
+  REQUIRE(boxed.size() == whole.size());
+  CHECK(boxed.size() > 20);
+  CHECK(box_ticks > 0);
+  std::size_t differing = 0;  // counted: Catch would print millions of floats
+  for (std::size_t i = 0; i < boxed.size(); ++i) differing += boxed[i] != whole[i];
+  CHECK(differing == 0);
 }

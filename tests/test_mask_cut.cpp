@@ -106,3 +106,62 @@ TEST_CASE("mask_cut_all: every channel's mask_cut, kept count and box in one pas
   CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 1.f, keep, ext), std::invalid_argument);
   CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 0.5f, keep, ext, 22), std::invalid_argument);
 }
+
+TEST_CASE("mask_stage2_input: inside and outside the mask, the outside part within the grown box; bad shapes refused", "[engine]") {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.1f, 1.f);
+  for (const auto& [h, w] : {std::pair{5, 3}, {7, 11}, {13, 2}})
+    for (const int c : {2, 6, 8})
+      for (const int margin : {0, 1, 3})
+        for (const bool empty : {false, true}) {
+          INFO(h << " x " << w << ", " << c << " channels, margin " << margin << (empty ? ", empty mask" : ""));
+          yelan::layers::ActBuf a;
+          a.resize(2, 2 * c, h, w);
+          for (std::size_t i = 0; i < a.act.floats(); ++i) a.act.data[i] = (i % 16) < std::size_t(c) ? u(rng) : 0.f;
+          const std::vector<float> before(a.act.data, a.act.data + a.act.floats());
+          std::vector<float> keep(std::size_t(h) * w, 0.f);
+          int x0 = w, y0 = h, x1 = 0, y1 = 0;
+          if (!empty)
+            for (int y = 0; y < h; ++y)
+              for (int x = 0; x < w; ++x)
+                if (rng() % 5 == 0 && x > 0 && y > 0) {
+                  keep[std::size_t(y) * w + x] = 1;
+                  x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x + 1), y1 = std::max(y1, y + 1);
+                }
+          yelan::input::mask_stage2_input(a.act, 1, keep, true, margin);
+          for (std::size_t i = 0; i < std::size_t(h) * w * 16; ++i) REQUIRE(a.act.data[i] == before[i]);  // frame 0 untouched
+          const float* f = a.act.data + std::size_t(h) * w * 16;
+          const float* b = before.data() + std::size_t(h) * w * 16;
+          for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+              const std::size_t p = std::size_t(y) * w + x;
+              const bool region = margin == 0 || (x1 > 0 && x >= x0 - margin && x < x1 + margin && y >= y0 - margin && y < y1 + margin);
+              for (int l = 0; l < c; ++l) {
+                REQUIRE(f[p * 16 + l] == b[p * 16 + l] * keep[p]);
+                REQUIRE(f[p * 16 + c + l] == (region ? b[p * 16 + l] * (1 - keep[p]) : 0.f));
+              }
+              for (int l = 2 * c; l < 16; ++l) REQUIRE(f[p * 16 + l] == 0.f);
+            }
+          // Without `outside`, apply_mask.
+          yelan::layers::ActBuf g;
+          g.resize(1, c, h, w);
+          for (std::size_t i = 0; i < g.act.floats(); ++i) g.act.data[i] = (i % 16) < std::size_t(c) ? u(rng) : 0.f;
+          std::vector<float> want(g.act.data, g.act.data + g.act.floats());
+          yelan::layers::ActBuf g2;
+          g2.resize(1, c, h, w);
+          std::copy(want.begin(), want.end(), g2.act.data);
+          yelan::input::apply_mask(g2.act, 0, keep);
+          yelan::input::mask_stage2_input(g.act, 0, keep, false, margin);
+          REQUIRE(std::equal(g.act.data, g.act.data + g.act.floats(), g2.act.data));
+        }
+  yelan::layers::ActBuf odd, wide;
+  odd.resize(1, 7, 4, 4);
+  wide.resize(1, 18, 4, 4);
+  const std::vector<float> keep(16, 1.f), short_keep(15, 1.f);
+  CHECK_THROWS_AS(yelan::input::mask_stage2_input(odd.act, 0, keep, true, 0), std::invalid_argument);
+  CHECK_THROWS_AS(yelan::input::mask_stage2_input(wide.act, 0, keep, true, 0), std::invalid_argument);
+  yelan::layers::ActBuf ok;
+  ok.resize(1, 12, 4, 4);
+  CHECK_THROWS_AS(yelan::input::mask_stage2_input(ok.act, 0, short_keep, true, 0), std::invalid_argument);
+  CHECK_NOTHROW(yelan::input::mask_stage2_input(ok.act, 0, keep, true, 0));
+}

@@ -67,13 +67,15 @@ def build_case(cfg, seed):
     mask_net, pose_net = MaskNet(cfg), PoseNet(cfg)
     gen = torch.Generator().manual_seed(seed + 1)
     shape = (cfg.window, cfg.channels, cfg.height, cfg.width)
+    # pose.outside_input: stage 2 reads twice the channels; stage 1 the first half of `input`.
+    pose_shape = (cfg.window, 2 * cfg.channels if cfg.outside_input else cfg.channels, cfg.height, cfg.width)
     randomise_batchnorm(mask_net, torch.rand(shape, generator=gen), gen)
-    calib = torch.rand(shape, generator=gen)
+    calib = torch.rand(pose_shape, generator=gen)
     randomise_batchnorm(pose_net, calib, gen)
     soften_heatmaps(pose_net, calib)
-    x = torch.rand(shape, generator=gen)
+    x = torch.rand(pose_shape, generator=gen)
     with torch.no_grad():
-        masks, scores = mask_net(x)
+        masks, scores = mask_net(x[:, :cfg.channels])
         heatmaps, joints = pose_net(x)
     out = {"masks": masks, "scores": scores, "joints_norm": joints}
     for i, planes in enumerate(heatmaps):

@@ -153,7 +153,11 @@ std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tenso
 
 std::map<std::string, Tensor> widen_pose_group(const std::map<std::string, Tensor>& old_pose, const ModelConfig& from,
                                                const ModelConfig& to, std::uint64_t seed, const std::string& source) {
-  check_sections(from, to, "pose", {"width_mult", "hidden", "crop_margin"}, "pose.width_mult and pose.hidden", source);
+  // pose.outside_input adds input channels (the events outside the mask) read by zero weights.
+  check_sections(from, to, "pose", {"width_mult", "hidden", "crop_margin", "outside_input"},
+                 "pose.width_mult, pose.hidden and pose.outside_input", source);
+  if (from.outside_input && !to.outside_input)
+    throw WeightsError(source + ": config '" + to.name + "' drops pose.outside_input; widening only adds channels");
   if (to.pose_width < from.pose_width || to.hidden < from.hidden)
     throw WeightsError(source + ": config '" + to.name + "' has a narrower pose net (width_mult " + std::to_string(to.pose_width) +
                        ", hidden " + std::to_string(to.hidden) + " against " + std::to_string(from.pose_width) + ", " +

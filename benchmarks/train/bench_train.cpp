@@ -148,6 +148,12 @@ void write_batches(hid_t loc, const std::string& name, const std::vector<hsize_t
   }
 }
 
+// The pose stage's batches are masked by the true masks: with pose.outside_input they hold
+// the input twice (inside and outside the mask).
+int input_channels(const ModelConfig& cfg, const StageData& d) {
+  return d.stage == "pose" ? cfg.pose_channels() : cfg.channels;
+}
+
 // Groups /pose and/or /mask: input [batches, frames, C, H, W]; pose: target [.., frames, J, 3],
 // valid [.., frames, J]; mask: labels [.., frames, N, H, W]. Written to a temporary and renamed.
 void write_data(const std::string& path, const ModelConfig& cfg, int windows, const std::vector<StageData>& stages) {
@@ -159,12 +165,13 @@ void write_data(const std::string& path, const ModelConfig& cfg, int windows, co
     h5::write_attr_string(f.get(), "config", cfg.json);
     h5::write_attr_i64(f.get(), "windows_per_batch", windows);
     h5::write_attr_i64(f.get(), "seed", std::int64_t(kSeed));
-    const hsize_t C = hsize_t(cfg.channels), H = hsize_t(cfg.height()), W = hsize_t(cfg.width()), J = hsize_t(cfg.joints);
+    const hsize_t H = hsize_t(cfg.height()), W = hsize_t(cfg.width()), J = hsize_t(cfg.joints);
     for (const StageData& d : stages) {
       h5::H5Id g = h5::create_group(f.get(), d.stage);
+      const int c = input_channels(cfg, d);
       const hsize_t B = d.input.size(), n = hsize_t(d.frames);
-      write_batches(g.get(), "input", {B, n, C, H, W},
-                    [&](int b) { return nchw(d.input[b].data(), d.frames, cfg.channels, cfg.height(), cfg.width()); });
+      write_batches(g.get(), "input", {B, n, hsize_t(c), H, W},
+                    [&](int b) { return nchw(d.input[b].data(), d.frames, c, cfg.height(), cfg.width()); });
       if (d.stage == "pose") {
         write_batches(g.get(), "target", {B, n, J, 3}, [&](int b) { return d.target[b]; });
         write_batches(g.get(), "valid", {B, n, J}, [&](int b) { return d.valid[b]; });
@@ -207,7 +214,7 @@ Row time_stage(const ModelConfig& cfg, const StageData& d, int steps, int thread
   const int batches = int(d.input.size());
   auto step = [&](int k) {
     const int b = k % batches;
-    const layers::Act x{const_cast<float*>(d.input[b].data()), d.frames, cfg.channels, cfg.height(), cfg.width()};
+    const layers::Act x{const_cast<float*>(d.input[b].data()), d.frames, input_channels(cfg, d), cfg.height(), cfg.width()};
     double loss;
     adam.zero_grad();
     if (is_pose) {

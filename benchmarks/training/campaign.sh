@@ -633,6 +633,28 @@ case "$what" in
   train-ev-fpr-grow4)
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-grow4.json DATA=$DATA_FPR_MIX/train \
       train pose ev-fpr-grow4 "${FPR_STEPS:-2000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 --init models/campaign/ev-fpr/checkpoint.h5 ;;
+  # Stage 2 reading the events outside stage 1's mask (thirty-fourth session): ev-fpr-grow4
+  # (its committed step 2000) trained behind the default's stage 1 and its reused masks, grown
+  # by 4 pixels, lr 3e-4 cosine (ev-fpr-mask's recipe), gated as it is (pose-s34-gated) or
+  # with pose.outside_input (pose-s34-outside: widened first, zero weights on the new
+  # channels, so both start from the same outputs). Run the two side by side at one thread.
+  train-pose-s34-gated)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-grow4.json DATA=$DATA_FPR_MIX/train \
+      train pose pose-s34-gated "${S34_STEPS:-1000}" --val-data "$DATA_SK_FP2/val" --lr 3e-4 \
+      --init models/campaign/ev-fpr-grow4/checkpoint.h5 --mask-weights models/default.h5 --mask-reuse 16 ;;
+  train-pose-s34-outside)
+    OUT_CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-grow4-outside.json
+    if [ ! -f "$RUNS/pose-s34-outside-init.h5" ]; then
+      "$Y" weights combine --mask models/default.h5 --pose models/campaign/ev-fpr-grow4/checkpoint.h5 \
+        --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-grow4.json -o "$RUNS/pose-s34-outside-from.h5"
+      "$Y" weights widen --weights "$RUNS/pose-s34-outside-from.h5" --config "$OUT_CFG" -o "$RUNS/pose-s34-outside-init.h5"
+    fi
+    CFG=$OUT_CFG DATA=$DATA_FPR_MIX/train train pose pose-s34-outside "${S34_STEPS:-1000}" --val-data "$DATA_SK_FP2/val" \
+      --lr 3e-4 --init "$RUNS/pose-s34-outside-init.h5" --mask-weights models/default.h5 --mask-reuse 16 ;;
+  ab-outside)
+    "$0" train-pose-s34-gated &
+    "$0" train-pose-s34-outside &
+    wait ;;
   train-ev-fpr-s4)
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-stride4.json DATA=$DATA_FPR_MIX/train \
       train pose ev-fpr-s4 "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \

@@ -113,8 +113,10 @@ int summary(const Args& a, std::ostream& out) {
   pose.params(pp);
   // A forward of one zero frame (a window of 1) through both networks, as inference runs it,
   // tracing every convolution; per-frame work does not depend on the window length.
-  layers::Floats input(std::size_t((cfg.channels + 15) / 16) * cfg.height() * cfg.width() * 16);
+  // With pose.outside_input stage 2 reads twice the channels; stage 1 the first ones of the same block.
+  layers::Floats input(std::size_t((cfg.pose_channels() + 15) / 16) * cfg.height() * cfg.width() * 16);
   const layers::Act x{input.data(), 1, cfg.channels, cfg.height(), cfg.width()};
+  const layers::Act x_pose{input.data(), 1, cfg.pose_channels(), cfg.height(), cfg.width()};
   mask.set_training(false);
   pose.set_training(false);
   layers::NoGrad no_grad;
@@ -124,7 +126,7 @@ int summary(const Args& a, std::ostream& out) {
   layers::conv_trace() = &mask_trace;
   mask.forward(x);
   layers::conv_trace() = &pose_trace;
-  pose.forward(x, 1);
+  pose.forward(x_pose, 1);
   layers::conv_trace() = nullptr;
   const std::size_t peak = layers::floats_peak_bytes() - held;
   std::vector<LayerRow> rows = layer_rows("mask", mask_trace, mp), pose_rows = layer_rows("pose", pose_trace, pp);
@@ -161,6 +163,8 @@ int summary(const Args& a, std::ostream& out) {
   }
   out << "config " << cfg.name << ": input " << cfg.window << " x " << cfg.channels << " x " << cfg.height() << " x "
       << cfg.width() << ", ConvLSTM " << (cfg.bidirectional ? "bidirectional" : "causal") << "\n";
+  if (cfg.outside_input)
+    out << "stage 2 reads " << cfg.pose_channels() << " channels: the input inside stage 1's mask, then outside it (pose.outside_input)\n";
   if (cfg.mask_pool > 1)
     out << "stage 1 on the input average-pooled " << cfg.mask_pool << " x " << cfg.mask_pool << " ("
         << cfg.height() / cfg.mask_pool << " x " << cfg.width() / cfg.mask_pool
@@ -214,9 +218,9 @@ int forward(const Args& a, std::ostream& out) {
     h5::H5Id ds = h5::check(H5Dopen2(f.get(), "input", H5P_DEFAULT), *in + ": open input");
     dims = h5::shape(ds.get());
     // Compared as stored (64-bit): a claim of 2^32 + 6 channels must not pass as 6.
-    if (dims.size() != 4 || dims[1] != hsize_t(cfg.channels) || dims[2] != hsize_t(cfg.height()) ||
+    if (dims.size() != 4 || dims[1] != hsize_t(cfg.pose_channels()) || dims[2] != hsize_t(cfg.height()) ||
         dims[3] != hsize_t(cfg.width()) || dims[0] < 1 || dims[0] % hsize_t(cfg.window))
-      throw UsageError(*in + ": input must be S x " + std::to_string(cfg.channels) + " x " + std::to_string(cfg.height()) +
+      throw UsageError(*in + ": input must be S x " + std::to_string(cfg.pose_channels()) + " x " + std::to_string(cfg.height()) +
                        " x " + std::to_string(cfg.width()) + " with S a multiple of the window " + std::to_string(cfg.window));
     // A parity tool's few windows, not a batch runner: a claim of millions of frames (an
     // unwritten dataset costs nothing on disk) must not size the buffer.
@@ -228,12 +232,13 @@ int forward(const Args& a, std::ostream& out) {
     h5::check(H5Dread(ds.get(), H5T_NATIVE_FLOAT, H5S_ALL, H5S_ALL, H5P_DEFAULT, input.data()), *in + ": read input");
   }
   const int S = int(dims[0]);
-  layers::Floats xb(std::size_t(S) * ((cfg.channels + 15) / 16) * cfg.height() * cfg.width() * 16);
-  const layers::Act x{xb.data(), S, cfg.channels, cfg.height(), cfg.width()};
+  // With pose.outside_input the input holds stage 2's channels, stage 1 reading the first half.
+  layers::Floats xb(std::size_t(S) * ((cfg.pose_channels() + 15) / 16) * cfg.height() * cfg.width() * 16);
+  const layers::Act x{xb.data(), S, cfg.pose_channels(), cfg.height(), cfg.width()};
   to_blocked(input, x);
   {
     layers::NoGrad no_grad;
-    mask.forward(x);
+    mask.forward({xb.data(), S, cfg.channels, cfg.height(), cfg.width()});
     pose.forward(x, cfg.window);
   }
   camera::TempFile tmp_file(*outp);

@@ -263,10 +263,12 @@ int widen(const Args& a, std::ostream& out) {
   const ModelConfig to = load_model_config(*name);
   weights::Weights w = weights::load_weights(*in);
   const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
-  const bool mask = to.mask_width != from.mask_width, pose = to.pose_width != from.pose_width || to.hidden != from.hidden;
+  const bool mask = to.mask_width != from.mask_width,
+             pose = to.pose_width != from.pose_width || to.hidden != from.hidden || to.outside_input != from.outside_input;
   if (!mask && !pose)
-    throw UsageError("weights widen: config " + to.name + " has the same mask.width_mult, pose.width_mult and pose.hidden as " +
-                     *in + "; nothing to widen");
+    throw UsageError("weights widen: config " + to.name +
+                     " has the same mask.width_mult, pose.width_mult, pose.hidden and pose.outside_input as " + *in +
+                     "; nothing to widen");
   if (mask) w.groups["mask"] = weights::widen_mask_group(w.groups["mask"], from, to, std::uint64_t(seed) * 2 + 1, *in);
   if (pose) w.groups["pose"] = weights::widen_pose_group(w.groups["pose"], from, to, std::uint64_t(seed) * 2 + 2, *in);
   w.config_json = to.json;
@@ -284,6 +286,7 @@ int widen(const Args& a, std::ostream& out) {
   if (pose)
     out << " pose net widened from width_mult " << from.pose_width << " to " << to.pose_width << " (" << from.resnet_mid() << " -> "
         << to.resnet_mid() << " channels into the ConvLSTM, hidden " << from.hidden << " -> " << to.hidden
+        << (to.outside_input && !from.outside_input ? "; the events outside the mask read by zero weights" : "")
         << "; the same outputs)" << (mask ? "," : ", mask from " + *in + ",");
   out << " config " << to.name << " (its run settings, not " << *in << "'s: calibrate after training)\n";
   return kOk;

@@ -149,9 +149,9 @@ struct PosePipeline::Impl {
     if (!(o.rate_hz >= 1 && o.rate_hz <= 1000)) throw std::invalid_argument("rate must be 1..1000 poses per second");
     dt_us = std::llround(1e6 / o.rate_hz);
     vol.resize(tore.volume_size());
-    frame.resize(1, cfg.channels, cfg.height(), cfg.width());
+    frame.resize(1, cfg.pose_channels(), cfg.height(), cfg.width());
     unmasked.resize(1, cfg.channels, cfg.height(), cfg.width());
-    if (cfg.bidirectional) window.resize(cfg.window, cfg.channels, cfg.height(), cfg.width());
+    if (cfg.bidirectional) window.resize(cfg.window, cfg.pose_channels(), cfg.height(), cfg.width());
     else nets.pose.set_streaming(true);
     slot_t.resize(std::size_t(cfg.window));
     slot_mask_ran.resize(std::size_t(cfg.window));
@@ -344,9 +344,13 @@ struct PosePipeline::Impl {
     }
     int use = hold_current ? 0 : idx;
     auto t0 = Clock::now();
-    // Stage 2 alone reads this tick's TORE, behind a stored mask: only the mask's box.
-    const bool box_only = !run_mask && opt.tore_box && cfg.runs_stage1() && cfg.masked_input && !cfg.bidirectional;
-    read_tore(T, box_only ? &stage2_box(use) : nullptr);
+    // Stage 2 alone reads this tick's TORE, behind a stored mask: only the mask's box (with
+    // pose.outside_input, the box of stage 2's crop: it reads the events around the mask too).
+    const bool box_only = !run_mask && opt.tore_box && cfg.runs_stage1() && cfg.masked_input && !cfg.bidirectional &&
+                          (!cfg.outside_input || crop > 0);
+    PoseNet::CropBox read_box = box_only ? stage2_box(use) : PoseNet::CropBox{};
+    if (cfg.outside_input) read_box = grown(read_box);
+    read_tore(T, box_only ? &read_box : nullptr);
     stats.times.tore_ms.push_back(ms_since(t0));
     t0 = Clock::now();
     if (run_mask) {
@@ -401,7 +405,7 @@ struct PosePipeline::Impl {
     const std::size_t per_frame = std::size_t(unmasked.act.cb()) * unmasked.act.pixels() * 16;
     in_use = use;
     std::copy_n(unmasked.act.data, per_frame, dst.data + std::size_t(n) * per_frame);
-    if (cfg.masked_input) input::apply_mask(dst, n, stage2_mask(use));
+    if (cfg.masked_input) input::mask_stage2_input(dst, n, stage2_mask(use), cfg.outside_input, crop);
     last_in = {dst.data + std::size_t(n) * per_frame, 1, dst.c, dst.h, dst.w};
     slot_t[std::size_t(slot)] = T;
     slot_mask_ran[std::size_t(slot)] = run_mask;

@@ -22,8 +22,9 @@ BatchBuilder::BatchBuilder(const ModelConfig& cfg, int windows, MaskSource sourc
   if (cfg.representation == "tore" && cfg.channels != 6)
     throw std::invalid_argument("config " + cfg.name + ": " + std::to_string(cfg.channels) +
                                 " input channels, but TORE with K = 3 gives 6");
+  outside_ = cfg.outside_input && (source_ == MaskSource::truth || source_ == MaskSource::net);
   const int n = windows * cfg.window, h = cfg.height(), w = cfg.width();
-  b_.input.resize(n, cfg.channels, h, w);
+  b_.input.resize(n, outside_ ? cfg.pose_channels() : cfg.channels, h, w);
   if (source_ == MaskSource::none) b_.labels.resize(n, cfg.n_masks, h, w);
   b_.target.assign(std::size_t(n) * kJoints * 3, 0.f);
   b_.valid.assign(std::size_t(n) * kJoints, 0.f);
@@ -92,17 +93,21 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
   if (int(w.frames.size()) < need) throw std::invalid_argument("window too short for the model");
   b_.k = {w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy, sw, sh};
   const layers::Act& in = b_.input.act;
+  const layers::Act tore_in{in.data, in.n, cfg_.channels, in.h, in.w};  // the TORE's channels (one block either way)
+  const auto mask_input = [&](int n, const std::vector<float>& keep) {
+    input::mask_stage2_input(in, n, keep, outside_, cfg_.crop_margin);
+  };
   for (int t = 0; t < S; ++t) {
     const int n = used_ * S + t;
     const auto& f = w.frames[std::size_t(L + t)];
     const std::vector<float>& planes = input_planes(cfg_, f, planes_);
-    input::downscale_tore(planes, sh, sw, d, in, n);
+    input::downscale_tore(planes, sh, sw, d, tore_in, n);
     if (fresh) input::downscale_tore(planes, sh, sw, d, one_.act, t);
     if (source_ == MaskSource::truth) {
       auto cells = mask_cells(f.mask, sw, d, H, W);
       for (float& c : cells) c = c > 0 ? 1.f : 0.f;  // any human pixel keeps the cell
       input::grow_mask(cells, H, W, cfg_.mask_grow);
-      input::apply_mask(in, n, cells);
+      mask_input(n, cells);
     }
     if (occ && occ->uniform() < 0.5) {
       const int rects = 1 + occ->below(2);
@@ -162,7 +167,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     for (int t = 0; t < S; ++t) {
       input::mask_cut(mask_net.masks(), t, 0, keep, float(cfg_.mask_cut));  // channel 0: the current mask
       input::grow_mask(keep, H, W, cfg_.mask_grow);
-      input::apply_mask(in, used_ * S + t, keep);
+      mask_input(used_ * S + t, keep);
     }
   } else if (source_ == MaskSource::net) {
     // Stage 1 at frames -phase, -phase + period, ... (at most S runs: one_ holds them).
@@ -177,7 +182,7 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
       const int age = (t + k) % P;  // as yelan run: a reused future mask at run.mask_cut_reused
       input::mask_cut(mask_net.masks(), (t + k) / P, age, keep, float(age ? cfg_.reused_mask_cut() : cfg_.mask_cut));
       input::grow_mask(keep, H, W, cfg_.mask_grow);
-      input::apply_mask(in, used_ * S + t, keep);
+      mask_input(used_ * S + t, keep);
     }
   }
   // Last, so the input is warped whole, masks and occluders with it; the mask stage's

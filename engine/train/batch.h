@@ -75,6 +75,7 @@ class BatchBuilder {
   ModelConfig cfg_;
   int windows_, lead_, used_ = 0;
   MaskSource source_;
+  bool outside_;  // pose.outside_input behind a mask: the input holds [inside | outside]
   Batch b_;
   layers::ActBuf one_;  // one window's unmasked input, for the frozen mask net
   std::vector<float> planes_;  // a frame's count planes (TORE is read in place)

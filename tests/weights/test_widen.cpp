@@ -330,3 +330,45 @@ TEST_CASE("yelan weights widen: a file that loads under the wider config and kee
   CHECK(wp.groups.at("pose").at("in_cnn.0.weight").shape == weights::Shape{16, 6, 7, 7});
   CHECK_NOTHROW(weights::LoadedNetworks(wp, dir / "p.h5"));
 }
+
+TEST_CASE("widening to pose.outside_input: the events outside the mask read by zero weights, the same joints", "[weights][widen]") {
+  const ModelConfig gated = tiny_pose(0.125, 12, "causal");
+  std::string text = gated.json;
+  text.insert(text.find("\"convlstm\""), "\"outside_input\": true, ");
+  const ModelConfig outside = parse_model_config(text, "test");
+  REQUIRE(outside.pose_channels() == 12);
+  Pose a(gated);
+  a.net.init(3);
+  weights::randomise_batchnorm(a.params, 4);
+  Pose b(outside);
+  {
+    weights::Weights w;
+    w.groups["pose"] = weights::widen_pose_group(weights::group_of(a.params), gated, outside, 5, "old.h5");
+    weights::load_group(w, "pose", b.params, "widened");
+    b.net.weights_changed();
+  }
+  // The old net's input in the first six channels, anything in the other six.
+  test::Owned x(6, gated.channels, gated.height(), gated.width(), 7), x2(6, outside.pose_channels(), gated.height(), gated.width(), 8);
+  for (int n = 0; n < 6; ++n)
+    for (std::size_t p = 0; p < x.act.pixels(); ++p)
+      for (int c = 0; c < 6; ++c) *x2.act.lane(n, c, p) = *x.act.lane(n, c, p);
+  for (const bool training : {false, true}) {
+    INFO("training mode " << training);
+    a.net.set_training(training);
+    b.net.set_training(training);
+    const std::vector<float> ya = pose_outputs(a, x.act), yb = pose_outputs(b, x2.act);
+    REQUIRE(ya.size() == yb.size());
+    double worst = 0;
+    for (std::size_t i = 0; i < ya.size(); ++i) worst = std::max(worst, double(std::abs(ya[i] - yb[i])));
+    CHECK(worst <= 1e-5);
+  }
+  const auto& w1 = b.param("in_cnn.0.weight");  // [c64, 12, 7, 7]
+  REQUIRE(w1.shape[1] == 12);
+  double outside_weights = 0;
+  for (std::int64_t o = 0; o < w1.shape[0]; ++o)
+    for (std::int64_t i = 6; i < 12; ++i)
+      for (int k = 0; k < 49; ++k) outside_weights += std::abs(w1.value[std::size_t((o * 12 + i) * 49 + k)]);
+  CHECK(outside_weights == 0);
+  // And back is refused: widening only adds.
+  refuses([&] { weights::widen_pose_group(weights::group_of(b.params), outside, gated, 1, "old.h5"); }, "drops pose.outside_input");
+}

@@ -37,6 +37,7 @@ class ModelConfig:
     convlstm: str          # bidirectional | causal | none (the skip block sees the head alone)
     raw: dict
     masked_input: bool = True      # False: stage 2 reads the whole input
+    outside_input: bool = False    # stage 2 reads [inside the mask | outside it]: 2 x channels
     mask_role: str = "mask"        # mask | presence (stage 1 only says whether anyone is there) | none
     crop_margin: int = 0           # inference only (C++ PoseNet::forward_cropped); 0: whole frame
     head_stride: int = 8           # the ResNet head's stride: 8, or 4 (layer2 keeps layer1's resolution)
@@ -114,6 +115,7 @@ def config_from_dict(d, where="config"):
         convlstm=_get(p, where + ".pose", "convlstm", str),
         raw=d,
         masked_input=_get_bool(p, where + ".pose", "masked_input", True),
+        outside_input=_get_bool(p, where + ".pose", "outside_input", False),
         crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
         head_stride=_get(p, where + ".pose", "head_stride", int, 8),
         hourglass_skip=_get_bool(p, where + ".pose", "hourglass_skip", False),
@@ -154,6 +156,8 @@ def config_from_dict(d, where="config"):
         (cfg.mask_role in ("mask", "presence", "none"), "mask.role must be mask, presence or none"),
         ((cfg.mask_role == "mask") == cfg.masked_input,
          "mask.role mask goes with pose.masked_input true, presence and none with false"),
+        (not cfg.outside_input or cfg.masked_input, "pose.outside_input needs pose.masked_input (a mask to be outside of)"),
+        (not cfg.outside_input or 2 * cfg.channels <= 16, "pose.outside_input needs input.channels <= 8 (one channel block)"),
         (cfg.mask_width > 0 and cfg.pose_width > 0, "width_mult must be > 0"),
         (cfg.n_masks >= 1 and cfg.hidden >= 1 and cfg.stages >= 1 and cfg.joints >= 1,
          "n_masks, hidden, stages and joints must be >= 1"),

@@ -106,7 +106,7 @@ class PoseNet(nn.Module):
         self.cfg = cfg
         c64, mid = cfg.resnet_widths()
         self.in_cnn = nn.Sequential(
-            nn.Conv2d(cfg.channels, c64, 7, stride=2, padding=3, bias=False),
+            nn.Conv2d(2 * cfg.channels if cfg.outside_input else cfg.channels, c64, 7, stride=2, padding=3, bias=False),
             nn.BatchNorm2d(c64), nn.ReLU(inplace=True),
             nn.MaxPool2d(3, stride=2, padding=1),
             resnet_layer(c64, c64, 3, 1),
