@@ -283,11 +283,14 @@ int widen(const Args& a, std::ostream& out) {
   if (mask)
     out << " mask net widened from width_mult " << from.mask_width << " to " << to.mask_width << " (" << from.unet_width(0)
         << " -> " << to.unet_width(0) << " channels at the top level; the same outputs)" << (pose ? ";" : ", pose from " + *in + ",");
-  if (pose)
+  const bool wider = to.pose_width != from.pose_width || to.hidden != from.hidden;
+  if (pose && wider)
     out << " pose net widened from width_mult " << from.pose_width << " to " << to.pose_width << " (" << from.resnet_mid() << " -> "
-        << to.resnet_mid() << " channels into the ConvLSTM, hidden " << from.hidden << " -> " << to.hidden
-        << (to.outside_input && !from.outside_input ? "; the events outside the mask read by zero weights" : "")
-        << "; the same outputs)" << (mask ? "," : ", mask from " + *in + ",");
+        << to.resnet_mid() << " channels into the ConvLSTM, hidden " << from.hidden << " -> " << to.hidden << ")";
+  if (pose && to.outside_input != from.outside_input)
+    out << (wider ? " and" : " pose net") << " given the input outside the mask (pose.outside_input: " << from.pose_channels()
+        << " -> " << to.pose_channels() << " input channels, the new ones read by zero weights)";
+  if (pose) out << "; the same outputs" << (mask ? "," : ", mask from " + *in + ",");
   out << " config " << to.name << " (its run settings, not " << *in << "'s: calibrate after training)\n";
   return kOk;
 }
