@@ -263,8 +263,8 @@ int widen(const Args& a, std::ostream& out) {
   const ModelConfig to = load_model_config(*name);
   weights::Weights w = weights::load_weights(*in);
   const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
-  const bool mask = to.mask_width != from.mask_width,
-             pose = to.pose_width != from.pose_width || to.hidden != from.hidden || to.outside_input != from.outside_input;
+  const bool mask = to.mask_width != from.mask_width, wider = to.pose_width != from.pose_width || to.hidden != from.hidden,
+             outside = to.outside_input != from.outside_input, pose = wider || outside;
   if (!mask && !pose)
     throw UsageError("weights widen: config " + to.name +
                      " has the same mask.width_mult, pose.width_mult, pose.hidden and pose.outside_input as " + *in +
@@ -283,11 +283,10 @@ int widen(const Args& a, std::ostream& out) {
   if (mask)
     out << " mask net widened from width_mult " << from.mask_width << " to " << to.mask_width << " (" << from.unet_width(0)
         << " -> " << to.unet_width(0) << " channels at the top level; the same outputs)" << (pose ? ";" : ", pose from " + *in + ",");
-  const bool wider = to.pose_width != from.pose_width || to.hidden != from.hidden;
-  if (pose && wider)
+  if (wider)
     out << " pose net widened from width_mult " << from.pose_width << " to " << to.pose_width << " (" << from.resnet_mid() << " -> "
         << to.resnet_mid() << " channels into the ConvLSTM, hidden " << from.hidden << " -> " << to.hidden << ")";
-  if (pose && to.outside_input != from.outside_input)
+  if (outside)
     out << (wider ? " and" : " pose net") << " given the input outside the mask (pose.outside_input: " << from.pose_channels()
         << " -> " << to.pose_channels() << " input channels, the new ones read by zero weights)";
   if (pose) out << "; the same outputs" << (mask ? "," : ", mask from " + *in + ",");
