@@ -655,6 +655,14 @@ case "$what" in
     "$0" train-pose-s34-gated &
     "$0" train-pose-s34-outside &
     wait ;;
+  # pose-s35: stage 2 for mask-s32 (thirty-fifth session): pose-s34-gated's recipe (ev-fpr-grow4's
+  # committed step 2000, 1000 steps, lr 3e-4 cosine, masks grown by 4 pixels) behind mask-s32's
+  # own reused masks, on the 480-recording mix. As deployed, mask-s32 behind the default's
+  # stage 2 lost 6 mm on common poses to early exit's older masks (thirty-third session).
+  train-pose-s35)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-grow4.json DATA=$DATA_FPR_MIX/train \
+      train pose pose-s35 "${S35_STEPS:-1000}" --val-data "$DATA_SK_FP2/val" --lr 3e-4 \
+      --init models/campaign/ev-fpr-grow4/checkpoint.h5 --mask-weights "${S35_MASK:-$RUNS/mask-s32/final.h5}" --mask-reuse 16 ;;
   train-ev-fpr-s4)
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16-stride4.json DATA=$DATA_FPR_MIX/train \
       train pose ev-fpr-s4 "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
