@@ -752,6 +752,12 @@ case "$what" in
         # A finished run's weights without its Adam moments: it cannot resume, but it is not lost.
         cp "$RUNS/$run/final.h5" "models/campaign/$run/"
         echo "$run: checkpoint and state are $((size >> 20)) MiB: only final.h5 copied" >&2
+      elif [ -f "$RUNS/$run/final.h5" ] && [ "$(stat -c %s "$RUNS/$run/checkpoint.h5")" -le $((20 << 20)) ]; then
+        # A finished stage-1 run: its last checkpoint is the mask net's weights alone (17 MiB at
+        # width 0.375; final.h5 adds the stage 2 it started beside). Lost once (mask-s32, 1.8
+        # CPU-hours), so kept.
+        cp "$RUNS/$run/checkpoint.h5" "models/campaign/$run/"
+        echo "$run: checkpoint and state are $((size >> 20)) MiB: only the finished checkpoint.h5 copied" >&2
       else
         echo "$run: checkpoint and state are $((size >> 20)) MiB: not copied (it resumes from $RUNS on this machine)" >&2
       fi
