@@ -306,7 +306,9 @@ TEST_CASE("run: run.mask_cut_reused cuts the future masks stage 2 reads between 
   const std::string cfg = ss.str();
   const auto brace = cfg.rfind('}');
   for (const auto& [name, extra] : std::vector<std::pair<std::string, std::string>>{
-           {"plain", ""}, {"same", ", \"mask_cut_reused\": 0.5"}, {"low", ", \"mask_cut_reused\": 0.02"}}) {
+           {"plain", ""},
+           {"same", ", \"mask_cut_reused\": 0.5"},
+           {"low", ", \"mask_cut_reused\": 0.02"}}) {
     std::ofstream(d / (name + ".json")) << cfg.substr(0, brace) << ", \"run\": {\"presence\": {\"a\": 0, \"b\": 30}, \"mask_cut\": 0.5"
                                         << extra << "}}\n";
     REQUIRE(run_cli({"weights", "init", "--config", d / (name + ".json"), "--seed", "2", "-o", d / (name + ".h5")}).code == 0);
@@ -326,6 +328,8 @@ TEST_CASE("run: run.mask_cut_reused cuts the future masks stage 2 reads between 
     yelan::run::run_file(pipe, d / "r.yelan.h5", 300000, [&](const yelan::run::Pose& p) {
       double kept = 0;
       for (float v : pipe.last_mask()) kept += v;
+      const bool same_mask = pipe.last_stage1_mask() == pipe.last_mask();  // nothing grown
+      CHECK(same_mask);
       out.push_back({p.mask_ran, p.mask_share, kept, p.joints_mm[0]});
     });
     return out;
@@ -356,6 +360,50 @@ TEST_CASE("run: run.mask_cut_reused cuts the future masks stage 2 reads between 
   const auto bad = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
   CHECK(bad.code == 2);
   CHECK(contains(bad.err, "run.mask_cut_reused must be in (0, 1)"));
+}
+
+TEST_CASE("run: run.mask_grow grows what stage 2 reads, not stage 1's masks (their IoU, pictures, verdict)", "[run]") {
+  // The shipped model grows its masks (run.mask_grow 4); run with growth off, everything stage
+  // 1 decides is the same, and its masks as cut are the grown run's before growth.
+  yelan::test::CliTempDir d("run-grow");
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "0.5s", "-o", d / "r.yelan.h5"}).code == 0);
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  struct Tick {
+    bool ran;
+    float share;
+    std::vector<float> read, cut;
+  };
+  auto ticks = [&](std::optional<int> grow) {
+    yelan::run::RunOptions o;
+    o.mask_grow = grow;
+    yelan::run::PosePipeline pipe(w, 346, 260, o);
+    std::vector<Tick> out;
+    yelan::run::run_file(pipe, d / "r.yelan.h5", 500000, [&](const yelan::run::Pose& p) {
+      out.push_back({p.mask_ran, p.mask_share, pipe.last_mask(), pipe.last_stage1_mask()});
+    });
+    return out;
+  };
+  const auto grown = ticks(std::nullopt), plain = ticks(0);
+  REQUIRE(grown.size() >= 20);
+  REQUIRE(plain.size() == grown.size());
+  int grew = 0, reused = 0;
+  for (std::size_t i = 0; i < grown.size(); ++i) {
+    INFO("tick " << i);
+    CHECK(grown[i].ran == plain[i].ran);
+    CHECK(grown[i].share == plain[i].share);
+    // As bools: Catch would print the 22490 values of each mask.
+    const bool plain_reads_cut = plain[i].read == plain[i].cut, same_cut = grown[i].cut == plain[i].cut;
+    CHECK(plain_reads_cut);
+    CHECK(same_cut);
+    double read = 0, cut = 0;
+    for (float v : grown[i].read) read += v;
+    for (float v : grown[i].cut) cut += v;
+    CHECK(read >= cut);
+    grew += read > cut;
+    reused += !grown[i].ran;
+  }
+  CHECK(grew >= grown.size() / 2);
+  CHECK(reused >= 5);
 }
 
 TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 2 reads the whole TORE", "[run][cli]") {

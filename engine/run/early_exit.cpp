@@ -72,7 +72,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
         const auto here = tm.index_at(p.t_us);
         if (!here) return;
         const std::uint8_t* truth = tm.mask(*here);
-        const std::vector<float>& pm = pipe.last_mask();
+        const std::vector<float>& pm = pipe.last_stage1_mask();
         if (pm.size() != std::size_t(mw) * mh) return;
         // Stage 1 ran here: each future mask's score against its true quality.
         if (p.mask_ran) {

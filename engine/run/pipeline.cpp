@@ -111,6 +111,7 @@ struct PosePipeline::Impl {
   std::vector<std::vector<float>> stage2_masks;
   std::vector<PoseNet::CropBox> stage2_boxes;
   std::vector<char> stage2_grown;  // whether stage2_masks[c] is grown yet
+  std::vector<std::vector<float>> as_cut;  // stage2_masks[c] before growth, kept once grown (IoU, pictures)
   std::vector<input::MaskExtent> extents, stage2_extents;  // of `masks`, of stage2_masks before growth
   std::vector<float> scores;
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
@@ -250,11 +251,19 @@ struct PosePipeline::Impl {
     if (!has_own_stage2_mask(use)) return masks[std::size_t(use)];
     auto& r = stage2_masks[std::size_t(use)];
     if (!stage2_grown[std::size_t(use)]) {
+      as_cut.resize(stage2_masks.size());
+      as_cut[std::size_t(use)] = r;
       const layers::Act& m = nets.mask.masks();
       input::grow_mask(r, m.h, m.w, nets.cfg.mask_grow);
       stage2_grown[std::size_t(use)] = true;
     }
     return r;
+  }
+  // Stage 1's mask `use` as cut (run.mask_cut, or run.mask_cut_reused for a future one), not grown.
+  const std::vector<float>& stage1_mask(int use) const {
+    if (!has_own_stage2_mask(use)) return masks[std::size_t(use)];
+    if (nets.cfg.mask_grow > 0 && stage2_grown[std::size_t(use)]) return as_cut[std::size_t(use)];
+    return stage2_masks[std::size_t(use)];
   }
   const PoseNet::CropBox& stage2_box(int use) const {
     return has_own_stage2_mask(use) ? stage2_boxes[std::size_t(use)] : boxes[std::size_t(use)];
@@ -537,6 +546,10 @@ const std::vector<float>& PosePipeline::last_tore() const { return impl_->full_t
 const std::vector<float>& PosePipeline::last_mask() const {
   static const std::vector<float> none;
   return impl_->masks.empty() ? none : impl_->stage2_mask(std::max(0, impl_->in_use));
+}
+const std::vector<float>& PosePipeline::last_stage1_mask() const {
+  static const std::vector<float> none;
+  return impl_->masks.empty() ? none : impl_->stage1_mask(std::max(0, impl_->in_use));
 }
 const layers::Act& PosePipeline::last_input() const { return impl_->last_in; }
 const std::vector<std::vector<float>>& PosePipeline::stored_masks() const { return impl_->masks; }

@@ -120,6 +120,9 @@ class PosePipeline {
   // future mask at run.mask_cut_reused) and its downscale.
   const std::vector<float>& last_tore() const;
   const std::vector<float>& last_mask() const;
+  // The same mask as stage 1 cut it, before run.mask_grow: what its IoU and the pictures read
+  // (and, through its share of the frame, the "person" verdict).
+  const std::vector<float>& last_stage1_mask() const;
   // Stage 1's latest run: its N masks (the current frame and N-1 future ones, 20 ms apart;
   // binarised, the model's input size) and their scores.
   const std::vector<std::vector<float>>& stored_masks() const;

@@ -92,7 +92,7 @@ void RunViz::add(const Pose& p, const PosePipeline& pipe) {
   const int W = 3 * w_;
   std::vector<std::uint8_t> rgb(std::size_t(W) * h_ * 3, 0), panel(std::size_t(w_) * h_ * 3, 0);
   const std::vector<float>& tore = pipe.last_tore();
-  const std::vector<float>& mask = pipe.last_mask();
+  const std::vector<float>& mask = pipe.last_stage1_mask();
   const int d = pipe.mask_downscale(), mw = w_ / d, mh = h_ / d;
   const std::size_t plane = std::size_t(w_) * h_;
   for (int y = 0; y < h_; ++y)
