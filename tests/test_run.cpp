@@ -306,9 +306,7 @@ TEST_CASE("run: run.mask_cut_reused cuts the future masks stage 2 reads between 
   const std::string cfg = ss.str();
   const auto brace = cfg.rfind('}');
   for (const auto& [name, extra] : std::vector<std::pair<std::string, std::string>>{
-           {"plain", ""},
-           {"same", ", \"mask_cut_reused\": 0.5"},
-           {"low", ", \"mask_cut_reused\": 0.02"}}) {
+           {"plain", ""}, {"same", ", \"mask_cut_reused\": 0.5"}, {"low", ", \"mask_cut_reused\": 0.02"}}) {
     std::ofstream(d / (name + ".json")) << cfg.substr(0, brace) << ", \"run\": {\"presence\": {\"a\": 0, \"b\": 30}, \"mask_cut\": 0.5"
                                         << extra << "}}\n";
     REQUIRE(run_cli({"weights", "init", "--config", d / (name + ".json"), "--seed", "2", "-o", d / (name + ".h5")}).code == 0);

@@ -106,12 +106,12 @@ struct PosePipeline::Impl {
   std::int64_t idle_recheck_us = 0;
   std::vector<std::vector<float>> masks;  // N binarised masks, H x W
   // Stage 2's masks where they differ from `masks`: the future ones (1..N-1) at
-  // run.mask_cut_reused, and with run.mask_grow every one (0..N-1) grown, with their boxes;
-  // an empty entry (or none): stage 2 reads `masks`.
+  // run.mask_cut_reused, and with run.mask_grow every one (0..N-1), as cut here and read
+  // grown (stage2_grown_masks), with their boxes; an empty entry (or none): stage 2 reads `masks`.
   std::vector<std::vector<float>> stage2_masks;
   std::vector<PoseNet::CropBox> stage2_boxes;
-  std::vector<char> stage2_grown;  // whether stage2_masks[c] is grown yet
-  std::vector<std::vector<float>> as_cut;  // stage2_masks[c] before growth, kept once grown (IoU, pictures)
+  std::vector<char> stage2_grown;  // whether stage2_grown_masks[c] is made yet
+  std::vector<std::vector<float>> stage2_grown_masks;  // with run.mask_grow: stage2_masks[c] grown, made when stage 2 first reads it
   std::vector<input::MaskExtent> extents, stage2_extents;  // of `masks`, of stage2_masks before growth
   std::vector<float> scores;
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
@@ -249,21 +249,19 @@ struct PosePipeline::Impl {
   }
   const std::vector<float>& stage2_mask(int use) {
     if (!has_own_stage2_mask(use)) return masks[std::size_t(use)];
-    auto& r = stage2_masks[std::size_t(use)];
+    if (nets.cfg.mask_grow == 0) return stage2_masks[std::size_t(use)];
     if (!stage2_grown[std::size_t(use)]) {
-      as_cut.resize(stage2_masks.size());
-      as_cut[std::size_t(use)] = r;
+      stage2_grown_masks.resize(stage2_masks.size());
+      stage2_grown_masks[std::size_t(use)] = stage2_masks[std::size_t(use)];
       const layers::Act& m = nets.mask.masks();
-      input::grow_mask(r, m.h, m.w, nets.cfg.mask_grow);
+      input::grow_mask(stage2_grown_masks[std::size_t(use)], m.h, m.w, nets.cfg.mask_grow);
       stage2_grown[std::size_t(use)] = true;
     }
-    return r;
+    return stage2_grown_masks[std::size_t(use)];
   }
   // Stage 1's mask `use` as cut (run.mask_cut, or run.mask_cut_reused for a future one), not grown.
   const std::vector<float>& stage1_mask(int use) const {
-    if (!has_own_stage2_mask(use)) return masks[std::size_t(use)];
-    if (nets.cfg.mask_grow > 0 && stage2_grown[std::size_t(use)]) return as_cut[std::size_t(use)];
-    return stage2_masks[std::size_t(use)];
+    return has_own_stage2_mask(use) ? stage2_masks[std::size_t(use)] : masks[std::size_t(use)];
   }
   const PoseNet::CropBox& stage2_box(int use) const {
     return has_own_stage2_mask(use) ? stage2_boxes[std::size_t(use)] : boxes[std::size_t(use)];
@@ -398,7 +396,7 @@ struct PosePipeline::Impl {
             stage2_boxes[std::size_t(c)] = {std::max(e.x0 - r, 0), std::max(e.y0 - r, 0), std::min(e.x1 + r, m.w),
                                             std::min(e.y1 + r, m.h)};
         }
-        stage2_grown.assign(std::size_t(cfg.n_masks), r == 0);
+        stage2_grown.assign(std::size_t(cfg.n_masks), 0);
       }
       mask_t = T;
       have_masks = true;
