@@ -97,6 +97,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     if (r.contains("depth_scale")) c.depth_scale = get_num(r, where + ".run", "depth_scale");
     c.depth_forearms = get_bool_or(r, where + ".run", "depth_forearms", true);
     if (r.contains("depth_tau_s")) c.depth_tau_s = get_num(r, where + ".run", "depth_tau_s");
+    if (r.contains("pose_tau_s")) c.pose_tau_s = get_num(r, where + ".run", "pose_tau_s");
     if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");
     if (r.contains("mask_cut_reused")) c.mask_cut_reused = get_num(r, where + ".run", "mask_cut_reused");
     if (r.contains("idle_recheck_s")) c.idle_recheck_s = get_num(r, where + ".run", "idle_recheck_s");
@@ -117,6 +118,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.head_stride == 8 || c.head_stride == 4, "pose.head_stride must be 8 or 4"},
       {c.presence_tau_s >= 0 && c.presence_tau_s <= 60, "run.presence.tau_s must lie in 0..60 (seconds)"},
       {c.depth_tau_s >= 0 && c.depth_tau_s <= 60, "run.depth_tau_s must lie in 0..60 (seconds)"},
+      {c.pose_tau_s >= 0 && c.pose_tau_s <= 10, "run.pose_tau_s must lie in 0..10 (seconds)"},
       {c.idle_recheck_s >= 0 && c.idle_recheck_s <= 1, "run.idle_recheck_s must lie in 0..1 (seconds)"},
       {c.mask_grow >= 0 && c.mask_grow <= 64, "run.mask_grow must lie in 0..64 (input pixels)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",

@@ -73,6 +73,9 @@ struct ModelConfig {
   //   (run::head_depth_from_height; a model's depth_scale is fitted under its choice).
   //   run.depth_tau_s (optional, default 0): the head depth's logarithm is averaged over
   //   the ticks with a person, exponentially with this time constant (run::DepthSmoother).
+  //   run.pose_tau_s (optional, default 0): each joint (at unit head depth, before the depth
+  //   scales it) is averaged over the ticks with a person, exponentially with this time
+  //   constant (run::JointSmoother): stage 2's tick-to-tick jitter against a limb's lag.
   //   run.mask_cut: stage 1's masks are the pixels whose sigmoid exceeds it (default 0.1, a
   //   cut that keeps the dancer for a masked stage 2; `yelan calibrate --choose-mask-cut`
   //   picks the one of best IoU against the true masks).
@@ -94,6 +97,7 @@ struct ModelConfig {
   double reused_mask_cut() const { return mask_cut_reused.value_or(mask_cut); }
   double depth_scale = 1;
   double depth_tau_s = 0;
+  double pose_tau_s = 0;
   double idle_recheck_s = 0;
   int mask_grow = 0;
   bool depth_forearms = true;

@@ -582,7 +582,7 @@ TEST_CASE("run: streaming evaluation counts ticks, follows beta, and the paper p
   yelan::test::CliTempDir d("run-stream-eval");
   REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
   std::ostringstream log;
-  const auto scenes = yelan::run::simulate_scenes({yelan::camera::sim::preset_spec("ben-dance3-front-high-static")}, 4, 0.2, 0.1, log);
+  auto scenes = yelan::run::simulate_scenes({yelan::camera::sim::preset_spec("ben-dance3-front-high-static")}, 4, 0.2, 0.1, log);
   REQUIRE(scenes.size() == 1);
   REQUIRE(scenes[0].events.size() > 1000);
   yelan::run::RunOptions o;
@@ -606,6 +606,23 @@ TEST_CASE("run: streaming evaluation counts ticks, follows beta, and the paper p
   CHECK(fixed.deployed.mpjpe_mm != Approx(every.deployed.mpjpe_mm).epsilon(1e-3));
   CHECK(every.person_missed == 0);
   CHECK(every.person_found == every.poses_scored);
+  // The dancer shows at every mask tick of this scene (one each 20 ms); a dancer wholly hidden
+  // (the same scene, told that no pixel of it shows) counts its poses apart, found or not.
+  REQUIRE(scenes[0].mask_t.size() >= 14);
+  CHECK(scenes[0].mask_t.size() == scenes[0].dancer_shows.size());
+  CHECK(std::all_of(scenes[0].dancer_shows.begin(), scenes[0].dancer_shows.end(), [](auto v) { return v != 0; }));
+  CHECK(every.dancer_hidden == 0);
+  // Presence by the conditions in the scene's name, as for recordings.
+  REQUIRE(every.presence_by_condition.count("static") == 1);
+  CHECK(every.presence_by_condition.at("static").person_ticks == every.poses_scored);
+  CHECK(every.presence_by_condition.at("high").person_called == every.person_found);
+  CHECK(every.presence_by_condition.count("low") == 0);
+  scenes[0].dancer_shows.assign(scenes[0].dancer_shows.size(), 0);
+  const auto hidden = yelan::run::evaluate_stream(d / "w.h5", scenes, o);
+  CHECK(hidden.dancer_hidden == every.poses_scored);
+  CHECK(hidden.dancer_hidden_called == hidden.person_found);
+  CHECK(hidden.person_found == every.person_found);
+  scenes[0].dancer_shows.assign(scenes[0].dancer_shows.size(), 1);
   // A model whose presence says nobody on every tick writes no joints: its poses are
   // counted as missed verdicts, never scored as NaN.
   std::ifstream micro(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
@@ -948,6 +965,8 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
   CHECK(j.at("empty_poses").get<int>() >= 10);
   CHECK(j.at("deployed").at("frames").get<int>() >= 5);
   CHECK(j.at("head_depth_ratio_median").get<double>() == Approx(1).margin(0.1));
+  CHECK(j.at("dancer_hidden").get<int>() == 0);  // the dancer's masks read from the file: it shows
+  CHECK(j.at("dancer_hidden_called_person").get<int>() == 0);
   // Presence by the conditions in the names: the dancer's ticks and the empty scene's apart,
   // the empty scene's as many as the poses counted above.
   CHECK(contains(ev.out, "presence by the conditions in the recordings' names"));
@@ -1062,6 +1081,21 @@ TEST_CASE("run: the shipped model finds nobody in the real DAVIS346 recording (a
   }
 }
 
+// A micro net of random weights (its joints and depths wander from tick to tick) on 0.4 s of a
+// dancer, stage 1 on every tick and a person on every tick: what the smoothing tests compare.
+struct PersonEveryTick {
+  yelan::test::CliTempDir d;
+  std::vector<yelan::run::SimulatedScene> scenes;
+  yelan::run::RunOptions o;
+  explicit PersonEveryTick(const std::string& name) : d(name) {
+    REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
+    std::ostringstream log;
+    scenes = yelan::run::simulate_scenes({yelan::camera::sim::preset_spec("ben-dance3-front-high-static")}, 4, 0.4, 0.1, log);
+    o.beta = 1.01;
+    o.presence_ab = std::array<double, 2>{0, 30};
+  }
+};
+
 TEST_CASE("run: the deployed head depth is averaged over the ticks with a person, and eval keeps its poses", "[run]") {
   using yelan::run::DepthSmoother;
   // ln(depth) averaged with time constant tau: after tau of a step, 1 - 1/e of the way in
@@ -1085,13 +1119,10 @@ TEST_CASE("run: the deployed head depth is averaged over the ticks with a person
   // Through the pipeline (a net of random weights, whose depths wander from tick to tick):
   // each smoothed depth is one step of that law from the previous one toward the tick's own
   // prior, and the joints scale with it; a tick with nobody starts the average afresh.
-  yelan::test::CliTempDir d("run-depth-tau");
-  REQUIRE(run_cli({"weights", "init", "--config", "micro", "--seed", "2", "-o", d / "w.h5"}).code == 0);
-  std::ostringstream log;
-  const auto scenes = yelan::run::simulate_scenes({yelan::camera::sim::preset_spec("ben-dance3-front-high-static")}, 4, 0.4, 0.1, log);
-  yelan::run::RunOptions o;
-  o.beta = 1.01;
-  o.presence_ab = std::array<double, 2>{0, 30};  // a person on every tick
+  PersonEveryTick f("run-depth-tau");
+  const auto& d = f.d;
+  const auto& scenes = f.scenes;
+  auto o = f.o;
   const auto unsmoothed = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
   o.depth_tau_s = 0.1;
   const auto smoothed = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
@@ -1163,4 +1194,91 @@ TEST_CASE("run: the deployed head depth is averaged over the ticks with a person
   CHECK(refused.code == 2);
   CHECK(contains(refused.err, "--poses is for eval --run"));
   CHECK(run_cli({"run", "--weights", d / "w.h5", "x.aedat4", "--depth-tau", "-1"}).code == 2);
+  CHECK(run_cli({"run", "--weights", d / "w.h5", "x.aedat4", "--pose-tau", "-1"}).code == 2);
+}
+
+TEST_CASE("run: the skeleton is averaged over the ticks with a person, after the depth prior reads it", "[run]") {
+  using yelan::run::JointSmoother;
+  using Skeleton = JointSmoother::Skeleton;
+  auto filled = [](double v) {
+    Skeleton s;
+    for (int j = 0; j < 13; ++j) s[j] = {v + j, -v, 2 * v};
+    return s;
+  };
+  // Each joint's coordinates move 1 - 1/e of the way in tau, whatever the tick rate; a
+  // skeleton with a joint that is not finite passes through and leaves the average alone.
+  JointSmoother raw(0);
+  CHECK(raw.update(filled(1), 0)[3][0] == 4);
+  CHECK(raw.update(filled(2), 20000)[3][0] == 5);
+  for (const std::int64_t dt : {20000, 5000}) {
+    JointSmoother s(0.1);
+    CHECK(s.update(filled(1), 0)[12][2] == 2);
+    Skeleton x{};
+    for (std::int64_t t = dt; t <= 100000; t += dt) x = s.update(filled(2), t);
+    const double w = 1 - std::exp(-1.0);
+    for (int j = 0; j < 13; ++j) {
+      CHECK(x[j][0] == Approx(1 + j + w).epsilon(1e-12));
+      CHECK(x[j][1] == Approx(-1 - w).epsilon(1e-12));
+      CHECK(x[j][2] == Approx(2 + 2 * w).epsilon(1e-12));
+    }
+    Skeleton bad = filled(7);
+    bad[5][1] = std::nan("");
+    CHECK(std::isnan(s.update(bad, 120000)[5][1]));
+    CHECK(s.update(filled(2), 120000)[0][0] > x[0][0]);  // went on from where it was
+    CHECK(s.update(filled(3), 100)[0][0] == 3);           // time went back: a new recording
+    s.reset();
+    CHECK(s.update(filled(5), 200000)[0][0] == 5);
+  }
+  // Through the pipeline (a net of random weights, whose joints jump from tick to tick): the
+  // head depth is the unsmoothed run's, each pose at unit depth is one step of that law from
+  // the previous one toward the tick's own; nobody there leaves no joints, as before.
+  PersonEveryTick f("run-pose-tau");
+  const auto& d = f.d;
+  const auto& scenes = f.scenes;
+  auto o = f.o;
+  const auto unsmoothed = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
+  o.pose_tau_s = 0.05;
+  const auto smoothed = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
+  REQUIRE(unsmoothed.poses.size() >= 18);
+  REQUIRE(smoothed.poses.size() == unsmoothed.poses.size());
+  int moved = 0;
+  for (std::size_t i = 0; i < smoothed.poses.size(); ++i) {
+    const auto& ps = smoothed.poses[i].pose;
+    const auto& pu = unsmoothed.poses[i].pose;
+    REQUIRE(ps.t_us == pu.t_us);
+    CHECK(ps.head_depth_mm == Approx(pu.head_depth_mm).epsilon(1e-12));
+    const auto& prev = smoothed.poses[i == 0 ? 0 : i - 1].pose;
+    const auto& pu_prev = unsmoothed.poses[i == 0 ? 0 : i - 1].pose;
+    const double w = i == 0 ? 1 : 1 - std::exp(-double(ps.t_us - prev.t_us) / 5e4);
+    bool all = true, any_moved = false;
+    for (int j = 0; j < 13; ++j)
+      for (int c = 0; c < 3; ++c) {
+        const double own = pu.joints_mm[j][c] / pu.head_depth_mm, before = prev.joints_mm[j][c] / prev.head_depth_mm;
+        const double expect = before + w * (own - before), got = ps.joints_mm[j][c] / ps.head_depth_mm;
+        all = all && std::abs(got - expect) <= 1e-5 * (1 + std::abs(expect));
+        const double own_before = pu_prev.joints_mm[j][c] / pu_prev.head_depth_mm;
+        // Smoothed where the tick's own pose moved: the average lags behind it.
+        any_moved = any_moved || (std::abs(own - own_before) > 1e-7 && std::abs(got - own) > 0.1 * std::abs(own - own_before));
+      }
+    INFO("pose " << i);
+    CHECK(all);
+    moved += any_moved;
+  }
+  CHECK(moved > int(smoothed.poses.size()) / 2);
+  o.presence_ab = std::array<double, 2>{0, -30};  // nobody on every tick: no joints at all
+  const auto nobody = yelan::run::evaluate_stream(d / "w.h5", scenes, o, true);
+  REQUIRE(nobody.poses.size() == unsmoothed.poses.size());
+  for (const auto& p : nobody.poses) CHECK(std::isnan(p.pose.joints_mm[0][0]));
+  // The config's key, checked where the weights are made; --pose-tau overrides it.
+  std::ifstream micro(std::string(YELAN_SOURCE_DIR) + "/weights_tools/configs/micro.json");
+  std::stringstream ss;
+  ss << micro.rdbuf();
+  const std::string cfg = ss.str();
+  const auto brace = cfg.rfind('}');
+  for (const char* tau : {"-0.1", "11"}) {
+    std::ofstream(d / "bad.json") << cfg.substr(0, brace) << ", \"run\": {\"pose_tau_s\": " << tau << "}}\n";
+    const auto bad_tau = run_cli({"weights", "init", "--config", d / "bad.json", "-o", d / "bad.h5"});
+    CHECK(bad_tau.code == 2);
+    CHECK(contains(bad_tau.err, "run.pose_tau_s must lie in 0..10"));
+  }
 }

@@ -800,6 +800,12 @@ case "$what" in
   ship-s36)
     "$Y" weights combine --mask models/campaign/mask-s32/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
       --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s35.json -o models/default.h5 ;;
+  # The default since the thirty-seventh session: ship-s36's networks and calibration, the
+  # skeleton averaged over the ticks (run.pose_tau_s 0.05, chosen on sk-src's validation
+  # dancers as deployed).
+  ship-s37)
+    "$Y" weights combine --mask models/campaign/mask-s32/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
+      --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s37.json -o models/default.h5 ;;
   combine)
     "$Y" weights combine --mask "$RUNS/${MASK_RUN:-mask-s2}/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;

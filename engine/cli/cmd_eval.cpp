@@ -43,6 +43,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   run::RunOptions o;
   o.beta = a.number_or("--beta", o.beta, 0, 1);
   if (a.value("--depth-tau")) o.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
+  if (a.value("--pose-tau")) o.pose_tau_s = a.number_or("--pose-tau", 0, 0, 10);
   o.mask_grow = spec.mask_grow;
   const bool keep = a.value("--poses").has_value();
   run::StreamEvalResult r;
@@ -75,12 +76,18 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   t << "presence: a person reported on " << std::setprecision(1) << (shown ? 100.0 * double(r.person_found) / double(shown) : 0.0)
     << "% of the " << shown << " poses whose frame shows the dancer (" << r.person_missed
     << " said no person: not scored)";
+  if (r.dancer_hidden) {
+    const std::uint64_t visible = shown - r.dancer_hidden, visible_found = r.person_found - r.dancer_hidden_called;
+    t << "; on " << (visible ? 100.0 * double(visible_found) / double(visible) : 0.0) << "% of the " << visible
+      << " where any pixel of the dancer shows (" << r.dancer_hidden << " with the dancer wholly hidden, "
+      << r.dancer_hidden_called << " of them said person)";
+  }
   if (r.empty_poses)
     t << "; on " << 100.0 * double(r.empty_called_person) / double(r.empty_poses) << "% of the " << r.empty_poses
       << " poses of scenes with nobody";
   t << "\n";
   if (!r.presence_by_condition.empty()) {
-    t << "presence by the conditions in the recordings' names (every pose in the span):\n";
+    t << "presence by the conditions in the " << (spec.recordings.empty() ? "scenes'" : "recordings'") << " names (every pose in the span):\n";
     run::print_presence_by_condition(r.presence_by_condition, t);
   }
   out << t.str();
@@ -91,6 +98,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
                              ", \"person_found\": " + std::to_string(r.person_found) +
                              ", \"person_missed\": " + std::to_string(r.person_missed) +
+                             ", \"dancer_hidden\": " + std::to_string(r.dancer_hidden) +
+                             ", \"dancer_hidden_called_person\": " + std::to_string(r.dancer_hidden_called) +
                              ", \"empty_poses\": " + std::to_string(r.empty_poses) +
                              ", \"empty_called_person\": " + std::to_string(r.empty_called_person) +
                              ", \"head_depth_abs_error_mm\": " + std::to_string(r.depth_abs_error_mm) +
@@ -104,7 +113,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
-                "--low-light-dn", "--poses", "--depth-tau", "--mask-pictures", "--mask-grow"},
+                "--low-light-dn", "--poses", "--depth-tau", "--pose-tau", "--mask-pictures", "--mask-grow"},
                {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");

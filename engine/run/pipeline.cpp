@@ -131,6 +131,7 @@ struct PosePipeline::Impl {
   std::vector<Cues> cues;
   PresenceSmoother smoother;
   DepthSmoother depth_smoother;
+  JointSmoother joint_smoother;
   double beta = 0.99;
   Pose last;
   bool have_last = false;
@@ -166,6 +167,8 @@ struct PosePipeline::Impl {
     smoother = PresenceSmoother(nets.cfg.presence_tau_s);
     if (o.depth_tau_s) nets.cfg.depth_tau_s = *o.depth_tau_s;
     depth_smoother = DepthSmoother(nets.cfg.depth_tau_s);
+    if (o.pose_tau_s) nets.cfg.pose_tau_s = *o.pose_tau_s;
+    joint_smoother = JointSmoother(nets.cfg.pose_tau_s);
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
     idle_recheck_us = std::llround(nets.cfg.idle_recheck_s * 1e6);
@@ -208,6 +211,9 @@ struct PosePipeline::Impl {
         if (p.person) z = depth_smoother.update(z, p.t_us);
         else depth_smoother.reset();
       }
+      // After the depth prior, which was fitted (run.depth_scale) on the tick's own limbs.
+      if (p.person) unit = joint_smoother.update(unit, p.t_us);
+      else joint_smoother.reset();
       p.head_depth_mm = z;
       double conf = 0;
       for (int j = 0; j < 13; ++j) {
@@ -474,6 +480,7 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
       m.have_masks = false;
       m.smoother.start_empty(m.next_tick - m.dt_us);  // one period before the first tick after the gap
       m.depth_smoother.reset();
+      m.joint_smoother.reset();
     }
     while (e.t > m.next_tick) {
       m.tick(m.next_tick, out);
@@ -532,6 +539,22 @@ void exp_average(double& avg, bool& have, std::int64_t& t_prev, double x, std::i
 
 double PresenceSmoother::update(double share, std::int64_t t_us) {
   exp_average(x_, have_, t_, presence_feature(share), t_us, tau_us_);
+  return x_;
+}
+
+JointSmoother::Skeleton JointSmoother::update(const Skeleton& joints, std::int64_t t_us) {
+  for (const auto& j : joints)
+    for (double v : j)
+      if (!std::isfinite(v)) return joints;
+  if (!have_ || tau_us_ <= 0 || t_us < t_) {
+    x_ = joints;
+  } else {
+    const double a = 1 - std::exp(-double(t_us - t_) / tau_us_);
+    for (std::size_t j = 0; j < x_.size(); ++j)
+      for (std::size_t c = 0; c < 3; ++c) x_[j][c] += a * (joints[j][c] - x_[j][c]);
+  }
+  have_ = true;
+  t_ = t_us;
   return x_;
 }
 

@@ -45,6 +45,8 @@ struct RunOptions {
   std::optional<double> presence_tau_s;
   // The head depth's smoothing time constant (s) instead of the model's run.depth_tau_s.
   std::optional<double> depth_tau_s;
+  // The skeleton's smoothing time constant (s) instead of the model's run.pose_tau_s.
+  std::optional<double> pose_tau_s;
   // Whether the depth prior counts the forearms, instead of the model's run.depth_forearms.
   std::optional<bool> depth_forearms;
   // Seconds between stage 1's runs while it sees nobody, instead of the model's run.idle_recheck_s.
@@ -206,6 +208,28 @@ class DepthSmoother {
   double tau_us_;
   bool have_ = false;
   double x_ = 0;
+  std::int64_t t_ = 0;
+};
+
+// The skeleton averaged over time: each joint at unit head depth (before the depth scales
+// it), exponentially with time constant tau_s (0: none). Stage 2's joints jitter from tick to
+// tick by more than a dancer moves in tens of milliseconds (the net hedges between the
+// places a limb could be); the price is lag (about tau_s behind a limb that moves). It
+// starts afresh on its first tick, when time goes backwards, and after reset() (nobody
+// there, or a gap in the stream).
+class JointSmoother {
+ public:
+  using Skeleton = std::array<std::array<double, 3>, 13>;
+  explicit JointSmoother(double tau_s = 0) : tau_us_(tau_s * 1e6) {}
+  // The smoothed skeleton at t_us. A skeleton with a joint that is not finite is passed
+  // through and leaves the average alone.
+  Skeleton update(const Skeleton& joints, std::int64_t t_us);
+  void reset() { have_ = false; }
+
+ private:
+  double tau_us_;
+  bool have_ = false;
+  Skeleton x_{};
   std::int64_t t_ = 0;
 };
 

@@ -15,10 +15,22 @@ namespace yelan::run {
 namespace {
 
 struct Collect final : camera::sim::SimSink {
-  std::vector<camera::Event>& out;
-  explicit Collect(std::vector<camera::Event>& o) : out(o) {}
-  void events(std::span<const camera::Event> ev) override { out.insert(out.end(), ev.begin(), ev.end()); }
+  SimulatedScene& out;
+  explicit Collect(SimulatedScene& o) : out(o) {}
+  void events(std::span<const camera::Event> ev) override { out.events.insert(out.events.end(), ev.begin(), ev.end()); }
+  void mask(std::int64_t t_us, const camera::sim::RenderedFrame& frame) override {
+    out.mask_t.push_back(t_us);
+    out.dancer_shows.push_back(std::any_of(frame.mask.begin(), frame.mask.end(), [](std::uint8_t v) { return v != 0; }));
+  }
 };
+
+// Whether the dancer shows at t_us: the latest mask tick at or before it (the first one
+// before any); true without masks.
+bool shows_at(const std::vector<std::int64_t>& mask_t, const std::vector<std::uint8_t>& shows, std::int64_t t_us) {
+  if (mask_t.empty()) return true;
+  const auto it = std::upper_bound(mask_t.begin(), mask_t.end(), t_us);
+  return shows[it == mask_t.begin() ? 0 : std::size_t(it - mask_t.begin()) - 1] != 0;
+}
 
 double total(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
 
@@ -34,7 +46,7 @@ std::vector<SimulatedScene> simulate_scenes(const std::vector<camera::sim::SimSp
     SimulatedScene sc;
     sc.sim = std::make_unique<camera::sim::Simulator>(s);
     sc.warmup_s = warmup_s;
-    Collect c(sc.events);
+    Collect c(sc);
     sc.sim->run_until(s.duration_s, c);
     progress << "  simulated [" << (i + 1) << "/" << scenes.size() << "] " << s.name << ": " << sc.events.size() << " events\n";
     out.push_back(std::move(sc));
@@ -71,8 +83,13 @@ struct StreamScorer {
   }
 
   // A pose of a recording with a dancer, against the label at its time.
-  void add(const Pose& p, const camera::sim::Joints13& label, const std::array<std::uint8_t, camera::sim::kJointCount>& label_valid) {
+  void add(const Pose& p, const camera::sim::Joints13& label, const std::array<std::uint8_t, camera::sim::kJointCount>& label_valid,
+           bool dancer_shows) {
     const bool dancer_seen = std::any_of(label_valid.begin(), label_valid.end(), [](auto v) { return bool(v); });
+    if (dancer_seen && !dancer_shows) {
+      ++r.dancer_hidden;
+      r.dancer_hidden_called += p.person;
+    }
     keep_pose(p, true, &label, label_valid.data());
     if (!p.person) {
       r.person_missed += dancer_seen;
@@ -155,7 +172,8 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
       const double t = double(p.t_us) * 1e-6;
       if (t < scene.warmup_s || t > end_s) continue;
       const sim::Label l = simulator.label_at(t);
-      sc.add(p, l.joints_mm, l.valid);
+      count_by_condition(sc.r.presence_by_condition, sc.source, true, p.person);
+      sc.add(p, l.joints_mm, l.valid, shows_at(scene.mask_t, scene.dancer_shows, p.t_us));
     }
     sc.add_run(pipe.stats());
   }
@@ -183,6 +201,18 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     sim::Joints13 joints;
     std::array<std::uint8_t, sim::kJointCount> valid{};
     std::uint64_t called = 0;
+    std::vector<std::uint8_t> shows;
+    if (info.dancer && !info.mask_t.empty()) {
+      // A few masks at a time: a recording's masks are tens of megabytes.
+      const std::size_t pixels = std::size_t(info.camera.width) * std::size_t(info.camera.height), chunk = 32;
+      for (std::size_t m = 0; m < info.mask_t.size(); m += chunk) {
+        const std::vector<std::uint8_t> px = sim::read_recording_masks(recordings[i], m, chunk);
+        for (std::size_t k = 0; k + 1 <= px.size() / pixels; ++k)
+          shows.push_back(std::any_of(px.begin() + std::ptrdiff_t(k * pixels), px.begin() + std::ptrdiff_t((k + 1) * pixels),
+                                      [](std::uint8_t v) { return v != 0; }));
+      }
+      if (shows.size() != info.mask_t.size()) shows.clear();  // fewer pictures than times: no opinion
+    }
     for (const Pose& p : poses) {
       count_by_condition(sc.r.presence_by_condition, info.name, info.dancer, p.person);
       called += p.person;
@@ -193,7 +223,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
         continue;
       }
       sim::label_at(info, p.t_us, joints, valid);
-      sc.add(p, joints, valid);
+      sc.add(p, joints, valid, shows.empty() || shows_at(info.mask_t, shows, p.t_us));
     }
     sc.add_run(pipe.stats());
     progress << "  [" << (i + 1) << "/" << recordings.size() << "] " << info.name << (info.dancer ? "" : " (empty)") << ": "

@@ -24,6 +24,10 @@ struct SimulatedScene {
   std::unique_ptr<camera::sim::Simulator> sim;
   std::vector<camera::Event> events;
   double warmup_s = 0.1;           // poses before this (TORE without history) are not scored
+  // At each mask tick (the simulator's mask_hz), whether any pixel of the dancer shows (the
+  // true mask after occlusion is not empty): a dancer wholly behind furniture makes no events.
+  std::vector<std::int64_t> mask_t;
+  std::vector<std::uint8_t> dancer_shows;
 };
 
 // Scene i runs with a seed drawn from `seed` and i, for warmup_s + seconds.
@@ -50,6 +54,10 @@ struct StreamEvalResult {
   // Poses in the scored span that said "no person" on a scene with a dancer in the picture
   // (no joints to score; a miss of the presence verdict) and those that said "person".
   std::uint64_t person_missed = 0, person_found = 0;
+  // Of those, the poses whose dancer was wholly hidden (joints in the picture, not one pixel of
+  // the dancer visible at the latest mask tick: nothing for an event camera to see) and those
+  // of them that said "person". The visible dancer's hit rate leaves them out.
+  std::uint64_t dancer_hidden = 0, dancer_hidden_called = 0;
   double mask_run_fraction = 0;    // of the ticks that ran stage 2
   double ms_per_tick = 0;          // mean over ticks, all stages
   double tore_ms = 0, stage1_ms = 0, stage2_ms = 0;  // mean per tick (stage 1: over every tick)
@@ -59,8 +67,8 @@ struct StreamEvalResult {
   double depth_ratio_median = 0, depth_abs_error_mm = 0;
   // Recordings without a dancer (evaluate_recordings): their poses and those that said person.
   std::uint64_t empty_poses = 0, empty_called_person = 0;
-  // Every pose's verdict under the conditions its recording's name says (evaluate_recordings):
-  // dancer recordings count all their poses in the span, the dancer in the picture or not.
+  // Every pose's verdict under the conditions its recording's or scene's name says: dancer
+  // recordings and scenes count all their poses in the span, the dancer in the picture or not.
   std::map<std::string, PresenceReport::Condition> presence_by_condition;
   std::vector<ScoredPose> poses;  // every pose in the scored spans, when asked for (keep_poses)
 };
