@@ -21,6 +21,8 @@ for path in sys.argv[1:]:
     j = json.load(open(path))
     sums = {}
     for name, row in j["by_condition"]["scene"].items():
+        if not row["frames"]:  # nothing scored there (mpjpe_mm null)
+            continue
         s = sums.setdefault(family(name), [0.0, 0, 0])
         s[0] += row["mpjpe_mm"] * row["frames"]
         s[1] += row["frames"]

@@ -26,7 +26,7 @@ def scenes(path):
 
 def mean(rows, keys):
     frames = sum(rows[k]["frames"] for k in keys)
-    return sum(rows[k]["mpjpe_mm"] * rows[k]["frames"] for k in keys) / frames if frames else float("nan")
+    return sum(rows[k]["mpjpe_mm"] * rows[k]["frames"] for k in keys if rows[k]["frames"]) / frames if frames else float("nan")
 
 
 ap = argparse.ArgumentParser()
@@ -58,5 +58,5 @@ for k in poor:
 width = max(len(m[0]) for m in models)
 print(f"{'':{width}}  {'IoU >= cut: true / stage 1 mm':>31}  {'below: true / stage 1 mm':>25}  {'median cost mm':>14}")
 for name, t, n in models:
-    cost = statistics.median(n[k]["mpjpe_mm"] - t[k]["mpjpe_mm"] for k in common)
+    cost = statistics.median(n[k]["mpjpe_mm"] - t[k]["mpjpe_mm"] for k in common if n[k]["frames"] and t[k]["frames"])
     print(f"{name:{width}}  {mean(t, good):14.1f} / {mean(n, good):6.1f}      {mean(t, poor):10.1f} / {mean(n, poor):6.1f}  {cost:14.1f}")

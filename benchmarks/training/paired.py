@@ -22,7 +22,8 @@ import sys
 
 
 def scene_mpjpe(path):
-    return {k: v["mpjpe_mm"] for k, v in json.load(open(path))["by_condition"]["scene"].items()}
+    # A scene with nothing scored (mpjpe_mm null) has nothing to pair.
+    return {k: v["mpjpe_mm"] for k, v in json.load(open(path))["by_condition"]["scene"].items() if v["frames"]}
 
 
 def pose_errors(path, mode):

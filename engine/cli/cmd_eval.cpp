@@ -65,11 +65,14 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     what = std::to_string(count) + " scenes";
   }
   std::ostringstream t;
-  t << std::fixed << std::setprecision(1) << "deployed path (yelan run, its own depth), " << what << ", "
-    << r.poses_scored << " poses: MPJPE " << r.deployed.mpjpe_mm << " mm, root-aligned " << r.deployed.mpjpe_root_mm
-    << " mm, PCK@150 " << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1)
-    << "; with the true head depth: MPJPE " << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm
-    << " mm; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks\n";
+  t << std::fixed << std::setprecision(1) << "deployed path (yelan run, its own depth), " << what << ", " << r.poses_scored;
+  if (r.poses_scored == 0)
+    t << " poses scored (no pose of a dancer in the picture said person): MPJPE n/a";
+  else
+    t << " poses: MPJPE " << r.deployed.mpjpe_mm << " mm, root-aligned " << r.deployed.mpjpe_root_mm << " mm, PCK@150 "
+      << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1) << "; with the true head depth: MPJPE "
+      << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm << " mm";
+  t << "; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks\n";
   t << std::setprecision(1) << "head depth as deployed: mean |error| " << r.depth_abs_error_mm << " mm, median estimate / truth "
     << std::setprecision(3) << r.depth_ratio_median << "\n";
   const std::uint64_t shown = r.person_found + r.person_missed;

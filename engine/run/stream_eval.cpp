@@ -171,8 +171,15 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
     for (const Pose& p : poses) {
       const double t = double(p.t_us) * 1e-6;
       if (t < scene.warmup_s || t > end_s) continue;
+      const bool dancer = simulator.spec().dancer;
+      count_by_condition(sc.r.presence_by_condition, sc.source, dancer, p.person);
+      if (!dancer) {  // an `-empty` scene: nobody to score, only the verdict
+        ++sc.r.empty_poses;
+        sc.r.empty_called_person += p.person;
+        sc.keep_pose(p, false, nullptr, nullptr);
+        continue;
+      }
       const sim::Label l = simulator.label_at(t);
-      count_by_condition(sc.r.presence_by_condition, sc.source, true, p.person);
       sc.add(p, l.joints_mm, l.valid, shows_at(scene.mask_t, scene.dancer_shows, p.t_us));
     }
     sc.add_run(pipe.stats());

@@ -65,7 +65,7 @@ struct StreamEvalResult {
   double crop_share = 1;           // mean share of the frame stage 2's head ran on
   // The deployed head depth against the true one, over the scored poses (0 when none).
   double depth_ratio_median = 0, depth_abs_error_mm = 0;
-  // Recordings without a dancer (evaluate_recordings): their poses and those that said person.
+  // Recordings and simulated scenes without a dancer (`-empty`): their poses and those that said person.
   std::uint64_t empty_poses = 0, empty_called_person = 0;
   // Every pose's verdict under the conditions its recording's or scene's name says: dancer
   // recordings and scenes count all their poses in the span, the dancer in the picture or not.

@@ -211,6 +211,9 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
 
 namespace {
 nlohmann::ordered_json scores_json(const PoseScores& s) {
+  if (s.frames == 0)  // nothing scored (an empty scene, or no pose said person): n/a, not 0 mm
+    return {{"mpjpe_mm", nullptr}, {"pck150", nullptr}, {"auc", nullptr}, {"mpjpe_root_mm", nullptr},
+            {"pck150_root", nullptr}, {"auc_root", nullptr}, {"frames", 0}};
   return {{"mpjpe_mm", s.mpjpe_mm}, {"pck150", s.pck150}, {"auc", s.auc}, {"mpjpe_root_mm", s.mpjpe_root_mm},
           {"pck150_root", s.pck150_root}, {"auc_root", s.auc_root}, {"frames", s.frames}};
 }
