@@ -80,7 +80,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     << "% of the " << shown << " poses whose frame shows the dancer (" << r.person_missed
     << " said no person: not scored)";
   if (r.dancer_hidden) {
-    const std::uint64_t visible = shown - r.dancer_hidden, visible_found = r.person_found - r.dancer_hidden_called;
+    const std::uint64_t visible = r.dancer_shown(), visible_found = r.dancer_shown_called();
     t << "; on " << (visible ? 100.0 * double(visible_found) / double(visible) : 0.0) << "% of the " << visible
       << " where any pixel of the dancer shows (" << r.dancer_hidden << " with the dancer wholly hidden, "
       << r.dancer_hidden_called << " of them said person)";

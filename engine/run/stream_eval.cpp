@@ -82,6 +82,13 @@ struct StreamScorer {
     r.poses.push_back(std::move(s));
   }
 
+  // A pose of a recording or scene with nobody in it: only its verdict counts.
+  void add_empty(const Pose& p) {
+    ++r.empty_poses;
+    r.empty_called_person += p.person;
+    keep_pose(p, false, nullptr, nullptr);
+  }
+
   // A pose of a recording with a dancer, against the label at its time.
   void add(const Pose& p, const camera::sim::Joints13& label, const std::array<std::uint8_t, camera::sim::kJointCount>& label_valid,
            bool dancer_shows) {
@@ -173,10 +180,8 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
       if (t < scene.warmup_s || t > end_s) continue;
       const bool dancer = simulator.spec().dancer;
       count_by_condition(sc.r.presence_by_condition, sc.source, dancer, p.person);
-      if (!dancer) {  // an `-empty` scene: nobody to score, only the verdict
-        ++sc.r.empty_poses;
-        sc.r.empty_called_person += p.person;
-        sc.keep_pose(p, false, nullptr, nullptr);
+      if (!dancer) {  // an `-empty` scene
+        sc.add_empty(p);
         continue;
       }
       const sim::Label l = simulator.label_at(t);
@@ -224,9 +229,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
       count_by_condition(sc.r.presence_by_condition, info.name, info.dancer, p.person);
       called += p.person;
       if (!info.dancer) {
-        ++sc.r.empty_poses;
-        sc.r.empty_called_person += p.person;
-        sc.keep_pose(p, false, nullptr, nullptr);
+        sc.add_empty(p);
         continue;
       }
       sim::label_at(info, p.t_us, joints, valid);

@@ -58,6 +58,9 @@ struct StreamEvalResult {
   // the dancer visible at the latest mask tick: nothing for an event camera to see) and those
   // of them that said "person". The visible dancer's hit rate leaves them out.
   std::uint64_t dancer_hidden = 0, dancer_hidden_called = 0;
+  // The poses where any pixel of the dancer shows, and of them those that said "person".
+  std::uint64_t dancer_shown() const { return person_found + person_missed - dancer_hidden; }
+  std::uint64_t dancer_shown_called() const { return person_found - dancer_hidden_called; }
   double mask_run_fraction = 0;    // of the ticks that ran stage 2
   double ms_per_tick = 0;          // mean over ticks, all stages
   double tore_ms = 0, stage1_ms = 0, stage2_ms = 0;  // mean per tick (stage 1: over every tick)
