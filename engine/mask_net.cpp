@@ -1,10 +1,12 @@
 #include "engine/mask_net.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 
 #include "layers/resample.h"
+#include "layers/simple.h"
 
 namespace yelan {
 
@@ -57,6 +59,26 @@ MaskNet::MaskNet(const ModelConfig& cfg)
 }
 
 void MaskNet::forward(const Act& x) {
+  forward_once(x);
+  if (!cfg_.mask_mirror || layers::grad_enabled()) return;
+  // The net trained on mirrored windows (--flip) answers both; their mean cancels part of
+  // what it gets wrong on one side only. Logits average (not probabilities): one cut for both.
+  const Act first = mirror_masks_buf_.like(masks_);
+  std::copy(masks_.data, masks_.data + masks_.floats(), first.data);
+  const std::vector<float> first_logits = logits_;
+  const Act flipped = mirror_in_buf_.like(x);
+  std::copy(x.data, x.data + x.floats(), flipped.data);
+  for (int n = 0; n < x.n; ++n) layers::flip_frame(flipped, n);
+  forward_once(flipped);
+  for (int n = 0; n < x.n; ++n) layers::flip_frame(masks_, n);
+  for (std::size_t i = 0; i < masks_.floats(); ++i) masks_.data[i] = 0.5f * (masks_.data[i] + first.data[i]);
+  for (std::size_t i = 0; i < logits_.size(); ++i) {
+    logits_[i] = 0.5f * (logits_[i] + first_logits[i]);
+    scores_[i] = 1.f / (1.f + std::exp(-logits_[i]));
+  }
+}
+
+void MaskNet::forward_once(const Act& x) {
   if (x.c != cfg_.channels || x.h != cfg_.height() || x.w != cfg_.width())
     throw std::invalid_argument("mask net '" + cfg_.name + "': input is " + std::to_string(x.c) + "x" + std::to_string(x.h) +
                                 "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.channels) + "x" +

@@ -51,7 +51,8 @@ class MaskNet : public layers::Module<MaskNet> {
     f(fc_, {"fc.", 43});
   }
 
-  // x: n frames, cfg.channels x H x W. Results valid until the next forward.
+  // x: n frames, cfg.channels x H x W. Results valid until the next forward. Under NoGrad with
+  // run.mask_mirror, the average of the net on x and on x mirrored (its masks mirrored back).
   void forward(const layers::Act& x);
   const layers::Act& masks() const { return masks_; }        // n x N logits x H x W
   const std::vector<float>& scores() const { return scores_; }  // n x N, after the sigmoid
@@ -59,6 +60,7 @@ class MaskNet : public layers::Module<MaskNet> {
   void backward(const layers::Act& x, const layers::Act& dmasks, const float* dscores);
 
  private:
+  void forward_once(const layers::Act& x);
   static constexpr int kLevels = 4;  // the U-Net's depth: 4 downs, 4 ups (the architecture's, not a config's)
   ModelConfig cfg_;
   int w_[kLevels + 1];
@@ -79,6 +81,7 @@ class MaskNet : public layers::Module<MaskNet> {
   layers::Act pooled_in_, pooled_masks_;
   layers::Act masks_, top_gap_, s1_, gap_;  // the score head: pooled top, then its two 1x1 convolutions
   std::vector<float> logits_, scores_;
+  layers::ActBuf mirror_in_buf_, mirror_masks_buf_;  // run.mask_mirror only
   // backward only, each dL/d the activation it is named after
   layers::ActBuf d_top_;                      // the last up block's output (what outc and the score head read)
   layers::ActBuf d_gap_, d_s1_, d_top_gap_, d_top_score_;  // the score head; d_top_score_ is its share of d_top_

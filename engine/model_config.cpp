@@ -96,6 +96,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     if (r.contains("beta")) c.run_beta = get_num(r, where + ".run", "beta");
     if (r.contains("depth_scale")) c.depth_scale = get_num(r, where + ".run", "depth_scale");
     c.depth_forearms = get_bool_or(r, where + ".run", "depth_forearms", true);
+    c.mask_mirror = get_bool_or(r, where + ".run", "mask_mirror", false);
     if (r.contains("depth_tau_s")) c.depth_tau_s = get_num(r, where + ".run", "depth_tau_s");
     if (r.contains("pose_tau_s")) c.pose_tau_s = get_num(r, where + ".run", "pose_tau_s");
     if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");

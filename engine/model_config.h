@@ -91,6 +91,9 @@ struct ModelConfig {
   //   again once this many seconds have passed (0: on every tick; at most the future masks'
   //   span, n_masks / 50 s), so an empty room costs a fraction of stage 1 while a dancer who
   //   walks in is seen at most this much later.
+  //   run.mask_mirror (optional, default false): at inference stage 1 also runs on the input
+  //   mirrored left to right and averages the two's logits (masks mirrored back, scores):
+  //   twice stage 1's cost on the ticks it runs, for a net trained with --flip.
   double run_beta = 0.99;
   double mask_cut = 0.1;
   std::optional<double> mask_cut_reused;  // absent: mask_cut
@@ -101,6 +104,7 @@ struct ModelConfig {
   double idle_recheck_s = 0;
   int mask_grow = 0;
   bool depth_forearms = true;
+  bool mask_mirror = false;
   double presence_a = 3.0, presence_b = 13.8;
   double presence_tau_s = 0;
   bool presence_calibrated = false;

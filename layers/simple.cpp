@@ -77,6 +77,16 @@ void zero_channels(const Act& a, int n, int c0, int count) {
   });
 }
 
+void flip_frame(const Act& a, int n) {
+  for (int cb = 0; cb < a.cb(); ++cb) {
+    float* p = a.data + (std::size_t(n) * a.cb() + cb) * a.pixels() * 16;
+    for (int y = 0; y < a.h; ++y) {
+      float* row = p + std::size_t(y) * a.w * 16;
+      for (int x = 0; x < a.w / 2; ++x) std::swap_ranges(row + x * 16, row + x * 16 + 16, row + (a.w - 1 - x) * 16);
+    }
+  }
+}
+
 void activation_forward(Activation a, const Act& x, const Act& y) {
   same_shape(x, y, "activation");
   const std::size_t n = x.floats();

@@ -52,6 +52,9 @@ class Linear {
 // cropping it back out (the adjoint), or pasting a crop's features into the frame's.
 void copy_window(const Act& src, int sy, int sx, const Act& dst, int dy, int dx, int h, int w);
 
+// Frame n of `a` mirrored left to right in place, every channel: cell x trades with cell w - 1 - x.
+void flip_frame(const Act& a, int n);
+
 // Address of channel c of pixel px of image n in the blocked layout (n, c/16, pixel, c%16).
 float* lane_ptr(const Act& a, int n, int c, std::size_t px);
 // Channels [s0, s0 + count) of image sn of src to [d0, d0 + count) of image dn of dst (same

@@ -9,6 +9,7 @@
 #include "engine/train/augment.h"
 #include "engine/train/batch.h"
 #include "layers/buffer.h"
+#include "layers/simple.h"
 
 using namespace yelan::train;
 
@@ -180,14 +181,14 @@ TEST_CASE("augment: a mirrored frame trades cell x with w - 1 - x in every chann
     for (int c = 0; c < 20; ++c)
       for (int y = 0; y < 3; ++y)
         for (int x = 0; x < 7; ++x) at(n, c, y, x) = float(n * 10000 + c * 100 + y * 10 + x);
-  flip_frame(a, 1);
+  yelan::layers::flip_frame(a, 1);
   for (int c = 0; c < 20; ++c)
     for (int y = 0; y < 3; ++y)
       for (int x = 0; x < 7; ++x) {
         REQUIRE(at(1, c, y, x) == float(10000 + c * 100 + y * 10 + (6 - x)));
         REQUIRE(at(0, c, y, x) == float(c * 100 + y * 10 + x));  // the other frame untouched
       }
-  flip_frame(a, 1);
+  yelan::layers::flip_frame(a, 1);
   for (int c = 0; c < 20; ++c) CHECK(at(1, c, 2, 1) == float(10000 + c * 100 + 21));
 }
 

@@ -3,6 +3,7 @@
 // shapes and invariants, and gradients by finite differences on the tiny config.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <fstream>
@@ -13,6 +14,7 @@
 #include "engine/mask_net.h"
 #include "engine/model_config.h"
 #include "engine/pose_net.h"
+#include "layers/simple.h"
 #include "layer_fd.h"
 
 using namespace yelan;
@@ -226,6 +228,64 @@ TEST_CASE("mask net forward shapes, scores in (0, 1), gradients by finite differ
                                  p.key.c_str(), 0.0);
   }
   CHECK(checked >= 10);
+}
+
+namespace {
+// The masks and scores of `net`'s last forward, copied.
+struct MaskOut {
+  std::vector<float> masks, scores;
+  explicit MaskOut(const MaskNet& net)
+      : masks(net.masks().data, net.masks().data + net.masks().floats()), scores(net.scores()) {}
+};
+std::vector<float> flipped(std::vector<float> v, const layers::Act& shape) {
+  layers::Act a = shape;
+  a.data = v.data();
+  for (int n = 0; n < a.n; ++n) layers::flip_frame(a, n);
+  return v;
+}
+float logit(float p) { return std::log(p / (1.f - p)); }
+}  // namespace
+
+TEST_CASE("mask net with run.mask_mirror: under NoGrad the mean of the net on x and on x mirrored, and a mirrored x mirrors its masks",
+          "[networks][mask]") {
+  const int pool = GENERATE(1, 2);
+  INFO("mask.pool " << pool);
+  ModelConfig cfg = load_model_config("tiny");
+  cfg.mask_pool = pool;
+  ModelConfig mirror_cfg = cfg;
+  mirror_cfg.mask_mirror = true;
+  MaskNet plain(cfg), mirror(mirror_cfg);
+  plain.init(3);
+  mirror.init(3);
+  plain.set_training(false);
+  mirror.set_training(false);
+  yelan::test::Owned x(2, cfg.channels, cfg.height(), cfg.width(), 5), fx(x.act);
+  std::copy(x.mem.data(), x.mem.data() + x.act.floats(), fx.mem.data());
+  for (int n = 0; n < 2; ++n) layers::flip_frame(fx.act, n);
+
+  // With gradients on (training), the mirror stays off: the backward's forward is the plain one.
+  plain.forward(x.act);
+  mirror.forward(x.act);
+  REQUIRE(MaskOut(mirror).masks == MaskOut(plain).masks);
+
+  layers::NoGrad no_grad;
+  plain.forward(x.act);
+  const MaskOut a(plain);
+  plain.forward(fx.act);
+  const MaskOut b(plain);
+  const layers::Act shape = plain.masks();
+  const std::vector<float> b_back = flipped(b.masks, shape);
+  mirror.forward(x.act);
+  const MaskOut m(mirror);
+  REQUIRE(a.masks != b_back);  // the tiny net is not mirror-symmetric, so the mean is a test
+  for (std::size_t i = 0; i < m.masks.size(); ++i) REQUIRE(m.masks[i] == Approx(0.5f * (a.masks[i] + b_back[i])).margin(1e-5));
+  for (std::size_t i = 0; i < m.scores.size(); ++i)
+    REQUIRE(logit(m.scores[i]) == Approx(0.5f * (logit(a.scores[i]) + logit(b.scores[i]))).margin(1e-3));
+  mirror.forward(fx.act);
+  const MaskOut mf(mirror);
+  const std::vector<float> m_flipped = flipped(m.masks, shape);
+  for (std::size_t i = 0; i < m.masks.size(); ++i) REQUIRE(mf.masks[i] == Approx(m_flipped[i]).margin(1e-5));
+  for (std::size_t i = 0; i < m.scores.size(); ++i) REQUIRE(mf.scores[i] == Approx(m.scores[i]).margin(1e-6));
 }
 
 TEST_CASE("causal pose net streamed a frame at a time equals the window forward", "[networks][pose]") {

@@ -78,16 +78,6 @@ std::array<double, 3> warp_joint(const Similarity& s, const std::array<double, 3
   return {(u2 - k.cx) * z / k.fx, (v2 - k.cy) * z / k.fy, z};
 }
 
-void flip_frame(const layers::Act& a, int n) {
-  for (int cb = 0; cb < a.cb(); ++cb) {
-    float* p = a.data + (std::size_t(n) * a.cb() + cb) * a.pixels() * 16;
-    for (int y = 0; y < a.h; ++y) {
-      float* row = p + std::size_t(y) * a.w * 16;
-      for (int x = 0; x < a.w / 2; ++x) std::swap_ranges(row + x * 16, row + x * 16 + 16, row + (a.w - 1 - x) * 16);
-    }
-  }
-}
-
 std::array<double, 3> flip_joint(const std::array<double, 3>& p, const Intrinsics& k, int cells_w, int d) {
   const double u = k.fx * p[0] / p[2] + k.cx, u2 = double(cells_w) * d - u;
   return {(u2 - k.cx) * p[2] / k.fx, p[1], p[2]};

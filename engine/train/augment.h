@@ -41,10 +41,7 @@ void warp_frame(const layers::Act& a, int n, const Similarity& s, int d, int sen
 // head unchanged.
 std::array<double, 3> warp_joint(const Similarity& s, const std::array<double, 3>& p, const Intrinsics& k, double z_ref);
 
-// Frame n of `a` mirrored left to right, every channel: cell x trades with cell w - 1 - x.
-void flip_frame(const layers::Act& a, int n);
-
-// A camera-frame joint under flip_frame's mirror of a picture `cells_w` cells of d pixels
+// A camera-frame joint under layers::flip_frame's mirror of a picture `cells_w` cells of d pixels
 // wide: its image point u goes to cells_w * d - u (pixel i spans [i, i + 1), as in
 // warp_point), v and the depth kept. Left and right trade names too; the caller swaps them.
 std::array<double, 3> flip_joint(const std::array<double, 3>& p, const Intrinsics& k, int cells_w, int d);

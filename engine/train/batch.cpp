@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "engine/input.h"
+#include "layers/simple.h"
 
 namespace yelan::train {
 
@@ -199,8 +200,8 @@ void BatchBuilder::add(const camera::sim::SimWindow& w, MaskNet& mask_net, camer
     }
   if (flip)
     for (int t = 0; t < S; ++t) {
-      flip_frame(in, used_ * S + t);
-      if (source_ == MaskSource::none) flip_frame(b_.labels.act, used_ * S + t);
+      layers::flip_frame(in, used_ * S + t);
+      if (source_ == MaskSource::none) layers::flip_frame(b_.labels.act, used_ * S + t);
     }
   ++used_;
 }
