@@ -60,7 +60,11 @@ MaskNet::MaskNet(const ModelConfig& cfg)
 
 void MaskNet::forward(const Act& x) {
   forward_once(x);
-  if (!cfg_.mask_mirror || layers::grad_enabled()) return;
+  if (cfg_.mask_mirror && !layers::grad_enabled()) add_mirror(x);
+}
+
+void MaskNet::add_mirror(const Act& x) {
+  if (layers::grad_enabled()) throw std::logic_error("mask net: the mirrored run is for inference (NoGrad)");
   // The net trained on mirrored windows (--flip) answers both; their mean cancels part of
   // what it gets wrong on one side only. Logits average (not probabilities): one cut for both.
   const Act first = mirror_masks_buf_.like(masks_);

@@ -54,6 +54,9 @@ class MaskNet : public layers::Module<MaskNet> {
   // x: n frames, cfg.channels x H x W. Results valid until the next forward. Under NoGrad with
   // run.mask_mirror, the average of the net on x and on x mirrored (its masks mirrored back).
   void forward(const layers::Act& x);
+  // After a plain forward on x (under NoGrad): x mirrored run too and the two averaged, as
+  // run.mask_mirror does (yelan run calls it where run.mask_mirror's margin says).
+  void add_mirror(const layers::Act& x);
   const layers::Act& masks() const { return masks_; }        // n x N logits x H x W
   const std::vector<float>& scores() const { return scores_; }  // n x N, after the sigmoid
   // dmasks: dL/dlogits (data may be null); dscores: dL/dscores (may be null).

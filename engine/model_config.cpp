@@ -96,7 +96,8 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     if (r.contains("beta")) c.run_beta = get_num(r, where + ".run", "beta");
     if (r.contains("depth_scale")) c.depth_scale = get_num(r, where + ".run", "depth_scale");
     c.depth_forearms = get_bool_or(r, where + ".run", "depth_forearms", true);
-    c.mask_mirror = get_bool_or(r, where + ".run", "mask_mirror", false);
+    if (r.contains("mask_mirror") && r["mask_mirror"].is_number()) c.mask_mirror_doubt = get_num(r, where + ".run", "mask_mirror");
+    else c.mask_mirror = get_bool_or(r, where + ".run", "mask_mirror", false);
     if (r.contains("depth_tau_s")) c.depth_tau_s = get_num(r, where + ".run", "depth_tau_s");
     if (r.contains("pose_tau_s")) c.pose_tau_s = get_num(r, where + ".run", "pose_tau_s");
     if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");
@@ -121,6 +122,8 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.depth_tau_s >= 0 && c.depth_tau_s <= 60, "run.depth_tau_s must lie in 0..60 (seconds)"},
       {c.pose_tau_s >= 0 && c.pose_tau_s <= 10, "run.pose_tau_s must lie in 0..10 (seconds)"},
       {c.idle_recheck_s >= 0 && c.idle_recheck_s <= 1, "run.idle_recheck_s must lie in 0..1 (seconds)"},
+      {c.mask_mirror_doubt >= 0 && c.mask_mirror_doubt < 0.5,
+       "run.mask_mirror must be true, false or a P(person) margin d in (0, 0.5)"},
       {c.mask_grow >= 0 && c.mask_grow <= 64, "run.mask_grow must lie in 0..64 (input pixels)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",
        "mask.role must be mask, presence or none"},

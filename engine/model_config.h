@@ -93,7 +93,9 @@ struct ModelConfig {
   //   walks in is seen at most this much later.
   //   run.mask_mirror (optional, default false): at inference stage 1 also runs on the input
   //   mirrored left to right and averages the two's logits (masks mirrored back, scores):
-  //   twice stage 1's cost on the ticks it runs, for a net trained with --flip.
+  //   twice stage 1's cost on the ticks it runs, for a net trained with --flip. A number d in
+  //   (0, 0.5) instead: only where yelan run is in doubt, on the runs whose current mask alone
+  //   gives P(person) in [d, 1 - d] (mask_mirror_doubt; the masks elsewhere are the plain net's).
   double run_beta = 0.99;
   double mask_cut = 0.1;
   std::optional<double> mask_cut_reused;  // absent: mask_cut
@@ -105,6 +107,7 @@ struct ModelConfig {
   int mask_grow = 0;
   bool depth_forearms = true;
   bool mask_mirror = false;
+  double mask_mirror_doubt = 0;  // 0: none
   double presence_a = 3.0, presence_b = 13.8;
   double presence_tau_s = 0;
   bool presence_calibrated = false;

@@ -81,6 +81,23 @@ TEST_CASE("yelan model summary counts the reference's parameters", "[cli][model]
   CHECK(cli({"model", "frob"}).code == 2);
 }
 
+TEST_CASE("yelan model summary counts stage 1 twice under run.mask_mirror, and says so", "[cli][model]") {
+  const std::string dir = std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/";
+  const std::string plain = dir + "small-mask0.375-pose0.125-masked-reuse-b094-crop8-s41.json",
+                    mirror = dir + "small-mask0.375-pose0.125-masked-reuse-b094-crop8-s42-mirror.json";
+  auto flops_per_mask = [](const std::string& json) {
+    const auto at = json.find("\"flops_per_mask\": ");
+    REQUIRE(at != std::string::npos);
+    return std::stod(json.substr(at + 18));
+  };
+  const Result p = cli({"model", "summary", "--config", plain, "--json"}), m = cli({"model", "summary", "--config", mirror, "--json"});
+  INFO(p.err << m.err);
+  REQUIRE((p.code == 0 && m.code == 0));
+  CHECK(flops_per_mask(m.out) == 2 * flops_per_mask(p.out));
+  CHECK(has(cli({"model", "summary", "--config", mirror}).out, "stage 1 runs twice a frame"));
+  CHECK_FALSE(has(cli({"model", "summary", "--config", plain}).out, "stage 1 runs twice a frame"));
+}
+
 TEST_CASE("yelan model forward writes every head for an input window", "[cli][model]") {
   TempDir dir;
   REQUIRE(cli({"weights", "init", "--config", "tiny", "--seed", "5", "-o", dir / "w.h5"}).code == 0);

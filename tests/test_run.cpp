@@ -404,6 +404,69 @@ TEST_CASE("run: run.mask_grow grows what stage 2 reads, not stage 1's masks (the
   CHECK(reused >= 5);
 }
 
+TEST_CASE("run: run.mask_mirror's margin redoes stage 1 mirrored exactly where its current mask leaves presence in doubt", "[run]") {
+  // Stage 1 on every tick (beta > 1) keeps no state, so each tick's masks depend on that tick
+  // alone: with a margin, a run whose plain share gives P(person) in [d, 1 - d] must give the
+  // always-mirrored run's share, any other the plain run's.
+  yelan::test::CliTempDir d("run-mirror");
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-low-dynamic", "--duration", "0.6s", "-o", d / "r.yelan.h5"}).code == 0);
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::array<double, 2> ab{};
+  auto shares = [&](double doubt, std::uint64_t* mirror_runs) {
+    yelan::run::RunOptions o;
+    o.beta = 1.01;
+    o.mask_mirror_doubt = doubt;
+    yelan::run::PosePipeline pipe(w, 346, 260, o);
+    std::vector<float> out;
+    yelan::run::run_file(pipe, d / "r.yelan.h5", 500000, [&](const yelan::run::Pose& p) {
+      REQUIRE(p.mask_ran);
+      out.push_back(p.mask_share);
+    });
+    if (mirror_runs) *mirror_runs = pipe.stats().mirror_runs;
+    ab = pipe.presence_ab();
+    return out;
+  };
+  auto p_of = [&](float share) { return double(float(yelan::run::presence_probability(share, ab[0], ab[1]))); };
+  std::uint64_t none_runs = 1;
+  const std::vector<float> plain = shares(0, &none_runs);
+  REQUIRE(plain.size() >= 20);
+  CHECK(none_runs == 0);
+  // Everything in doubt (P in [1e-9, 1 - 1e-9]): every run mirrored.
+  std::uint64_t all_runs = 0;
+  const std::vector<float> mirrored = shares(1e-9, &all_runs);
+  REQUIRE(mirrored.size() == plain.size());
+  CHECK(all_runs == plain.size());
+  CHECK(mirrored != plain);
+  // A margin splitting the ticks: the median distance of P from 0 or 1, between two ticks'.
+  std::vector<double> m;
+  for (float s : plain) m.push_back(std::min(p_of(s), 1 - p_of(s)));
+  std::sort(m.begin(), m.end());
+  m.erase(std::unique(m.begin(), m.end()), m.end());
+  REQUIRE(m.size() >= 2);
+  const double margin = 0.5 * (m[m.size() / 2 - 1] + m[m.size() / 2]);
+  std::uint64_t some_runs = 0;
+  const std::vector<float> some = shares(margin, &some_runs);
+  REQUIRE(some.size() == plain.size());
+  std::uint64_t in_doubt = 0;
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    INFO("tick " << i << ", P " << p_of(plain[i]) << ", margin " << margin);
+    const bool doubt = p_of(plain[i]) >= margin && p_of(plain[i]) <= 1 - margin;
+    in_doubt += doubt;
+    CHECK(some[i] == (doubt ? mirrored[i] : plain[i]));
+  }
+  CHECK(some_runs == in_doubt);
+  CHECK(in_doubt > 0);
+  CHECK(in_doubt < plain.size());
+  yelan::run::RunOptions bad;
+  bad.mask_mirror_doubt = 0.5;
+  CHECK_THROWS_AS(yelan::run::PosePipeline(w, 346, 260, bad), std::invalid_argument);
+  // yelan run --mask-mirror D: the same margin from the command line, and says what it did.
+  const auto r = run_cli({"run", "--weights", w, d / "r.yelan.h5", "--no-early-exit", "--mask-mirror", "0.000001"});
+  REQUIRE(r.code == 0);
+  CHECK(yelan::test::contains(r.out + r.err, "stage 1 ran again on the mirrored input on"));
+  CHECK(run_cli({"run", "--weights", w, d / "r.yelan.h5", "--mask-mirror", "0.5"}).code == 2);
+}
+
 TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 2 reads the whole TORE", "[run][cli]") {
   // Three configs of the same networks: stage 1 masks stage 2's input (the default), stage 1
   // decides presence only, no stage 1. The same seed gives the same tensors to all three.

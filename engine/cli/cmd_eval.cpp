@@ -72,7 +72,9 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     t << " poses: MPJPE " << r.deployed.mpjpe_mm << " mm, root-aligned " << r.deployed.mpjpe_root_mm << " mm, PCK@150 "
       << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1) << "; with the true head depth: MPJPE "
       << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm << " mm";
-  t << "; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks\n";
+  t << "; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks";
+  if (r.mirror_runs) t << " (mirrored too on " << std::setprecision(1) << 100 * r.mirror_run_fraction << "%)";
+  t << "\n";
   t << std::setprecision(1) << "head depth as deployed: mean |error| " << r.depth_abs_error_mm << " mm, median estimate / truth "
     << std::setprecision(3) << r.depth_ratio_median << "\n";
   const std::uint64_t shown = r.person_found + r.person_missed;
@@ -99,6 +101,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              train::pose_scores_json(r.paper) + ", \"scenes\": " +
                              std::to_string(count) +
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
+                             ", \"mirror_run_fraction\": " + std::to_string(r.mirror_run_fraction) +
                              ", \"person_found\": " + std::to_string(r.person_found) +
                              ", \"person_missed\": " + std::to_string(r.person_missed) +
                              ", \"dancer_hidden\": " + std::to_string(r.dancer_hidden) +

@@ -169,6 +169,8 @@ int summary(const Args& a, std::ostream& out) {
     out << "stage 1 on the input average-pooled " << cfg.mask_pool << " x " << cfg.mask_pool << " ("
         << cfg.height() / cfg.mask_pool << " x " << cfg.width() / cfg.mask_pool
         << "), its mask logits resized back bilinearly\n";
+  if (cfg.mask_mirror)
+    out << "stage 1 runs twice a frame, on the input and on its mirror image, the two averaged (run.mask_mirror): its layers are listed twice\n";
   out << "per frame, as inference runs it (BN and ReLU folded into each convolution):\n";
   out << std::left << std::setw(5) << "net" << std::setw(42) << "layer" << std::setw(13) << "op" << std::setw(14)
       << "in" << std::setw(14) << "out" << std::right << std::setw(10) << "params" << std::setw(10) << "MFLOPs"

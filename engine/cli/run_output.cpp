@@ -196,6 +196,9 @@ void RunSession::report(const std::string& source, double wall_s, std::ostream& 
       << " ticks without events repeated the last pose; a person on " << (s.poses ? 100.0 * double(s.person_poses) / double(s.poses) : 0.0) << "% of the poses\n"
       << "per tick ms p50/p99: TORE " << p50_p99(t.tore_ms) << ", stage 1 " << p50_p99(t.stage1_ms) << ", stage 2 "
       << p50_p99(t.stage2_ms) << ", whole tick " << p50_p99(t.tick_ms) << "\n";
+  if (s.mirror_runs)
+    out << "stage 1 ran again on the mirrored input on " << s.mirror_runs << " of its " << s.mask_runs
+        << " runs (run.mask_mirror: where the plain run left presence in doubt)\n";
   if (s.mask_runs)
     out << "early exit saved about " << std::setprecision(1) << run::early_exit_saved_ms(s) << " ms of stage 1 ("
         << 100 * saved_share() << "% of what the ticks would have taken with stage 1 on each)\n";

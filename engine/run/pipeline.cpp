@@ -171,6 +171,11 @@ struct PosePipeline::Impl {
     joint_smoother = JointSmoother(nets.cfg.pose_tau_s);
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
+    if (o.mask_mirror_doubt) {
+      if (!(*o.mask_mirror_doubt >= 0 && *o.mask_mirror_doubt < 0.5))
+        throw std::invalid_argument("the mask mirror's margin must lie in [0, 0.5)");
+      nets.cfg.mask_mirror_doubt = *o.mask_mirror_doubt;
+    }
     idle_recheck_us = std::llround(nets.cfg.idle_recheck_s * 1e6);
     k = {kFocalPx, kFocalPx, sw / 2.0, sh / 2.0, sw, sh};
     warm_up();
@@ -183,6 +188,7 @@ struct PosePipeline::Impl {
     const ModelConfig& cfg = nets.cfg;
     layers::NoGrad no_grad;
     if (cfg.runs_stage1()) nets.mask.forward(unmasked.act);
+    if (cfg.runs_stage1() && cfg.mask_mirror_doubt > 0) nets.mask.add_mirror(unmasked.act);
     const layers::Act& x = cfg.bidirectional ? window.act : frame.act;
     const int frames = cfg.bidirectional ? cfg.window : 1;
     if (crop > 0) nets.pose.forward_cropped(x, {0, 0, x.w, x.h}, frames);
@@ -247,6 +253,10 @@ struct PosePipeline::Impl {
   }
   float presence_of(float share) const {
     return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
+  }
+  bool in_doubt(float share) const {
+    const double d = nets.cfg.mask_mirror_doubt, p = presence_of(share);
+    return d > 0 && p >= d && p <= 1 - d;
   }
 
   // What stage 2 reads behind mask `use` (its own cut or grown where the config says so), and its box.
@@ -370,6 +380,12 @@ struct PosePipeline::Impl {
       nets.mask.forward(unmasked.act);
       const layers::Act& m = nets.mask.masks();
       input::mask_cut_all(m, 0, float(cfg.mask_cut), masks, extents);
+      if (in_doubt(float(extents[0].kept) / float(m.pixels()))) {
+        // run.mask_mirror's margin: the mirrored run only where presence hangs on this mask.
+        nets.mask.add_mirror(unmasked.act);
+        input::mask_cut_all(m, 0, float(cfg.mask_cut), masks, extents);
+        ++stats.mirror_runs;
+      }
       scores = nets.mask.scores();
       boxes.assign(std::size_t(cfg.n_masks), PoseNet::CropBox{});
       cues.assign(std::size_t(cfg.n_masks), Cues{});
@@ -512,6 +528,7 @@ void PosePipeline::finish(std::int64_t t_us, const std::function<void(const Pose
 
 const RunStats& PosePipeline::stats() const { return impl_->stats; }
 std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
+std::array<double, 2> PosePipeline::presence_ab() const { return {impl_->nets.cfg.presence_a, impl_->nets.cfg.presence_b}; }
 double PosePipeline::beta() const { return impl_->beta; }
 
 double presence_feature(double share) { return std::log(std::max(0.0, share) + 0.001); }

@@ -51,6 +51,10 @@ struct RunOptions {
   std::optional<bool> depth_forearms;
   // Seconds between stage 1's runs while it sees nobody, instead of the model's run.idle_recheck_s.
   std::optional<double> idle_recheck_s;
+  // run.mask_mirror's margin d instead of the model's: stage 1 run again mirrored where its
+  // current mask gives P(person) in [d, 1 - d] (0: never; a model with run.mask_mirror true
+  // mirrors every run regardless).
+  std::optional<double> mask_mirror_doubt;
   // On ticks where stage 2 alone reads the TORE behind a stored mask, read it out only in the
   // mask's box (the poses are the same; false: the whole sensor every tick, for comparison).
   bool tore_box = true;
@@ -88,6 +92,7 @@ struct StageTimes {
 
 struct RunStats {
   std::uint64_t ticks = 0, mask_runs = 0, stale = 0, events = 0, poses = 0;
+  std::uint64_t mirror_runs = 0;  // stage 1's runs redone on the mirrored input (run.mask_mirror's margin)
   std::uint64_t person_poses = 0;  // poses with a person
   std::uint64_t gap_ticks = 0;  // skipped over gaps of more than 2 s without events
   double crop_area = 0;         // sum over stage-2 runs of the head's share of the frame
@@ -115,6 +120,7 @@ class PosePipeline {
   void finish(std::int64_t t_us, const std::function<void(const Pose&)>& out);
   const RunStats& stats() const;
   std::string config_name() const;
+  std::array<double, 2> presence_ab() const;  // the calibration P(person) is read with: {a, b}
   double beta() const;  // the early-exit threshold in use
   bool causal() const;
   // For pictures, valid inside the pose callback: the TORE volume of the latest tick (2K x

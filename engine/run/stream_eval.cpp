@@ -129,6 +129,7 @@ struct StreamScorer {
   void add_run(const RunStats& st) {
     r.ticks += st.ticks;
     r.mask_runs += st.mask_runs;
+    r.mirror_runs += st.mirror_runs;
     r.stale += st.stale;
     crops.crop_area += st.crop_area;
     crops.crop_runs += st.crop_runs;
@@ -143,6 +144,7 @@ struct StreamScorer {
     r.deployed = deployed.scores();
     const double timed = double(std::max<std::uint64_t>(1, r.ticks - r.stale));  // stale ticks run no stage
     r.mask_run_fraction = double(r.mask_runs) / timed;
+    r.mirror_run_fraction = double(r.mirror_runs) / timed;
     r.ms_per_tick = tick_ms / timed;
     r.tore_ms = tore_ms / timed;
     r.stage1_ms = s1_ms / timed;

@@ -50,7 +50,7 @@ std::string scored_poses_csv(const std::vector<ScoredPose>& poses);
 struct StreamEvalResult {
   train::PoseScores paper;         // head depth from the label (the paper's protocol)
   train::PoseScores deployed;      // head depth from the pipeline's estimate
-  std::uint64_t ticks = 0, mask_runs = 0, stale = 0, poses_scored = 0;
+  std::uint64_t ticks = 0, mask_runs = 0, mirror_runs = 0, stale = 0, poses_scored = 0;
   // Poses in the scored span that said "no person" on a scene with a dancer in the picture
   // (no joints to score; a miss of the presence verdict) and those that said "person".
   std::uint64_t person_missed = 0, person_found = 0;
@@ -62,6 +62,7 @@ struct StreamEvalResult {
   std::uint64_t dancer_shown() const { return person_found + person_missed - dancer_hidden; }
   std::uint64_t dancer_shown_called() const { return person_found - dancer_hidden_called; }
   double mask_run_fraction = 0;    // of the ticks that ran stage 2
+  double mirror_run_fraction = 0;  // of the same ticks, stage 1 run again mirrored (run.mask_mirror)
   double ms_per_tick = 0;          // mean over ticks, all stages
   double tore_ms = 0, stage1_ms = 0, stage2_ms = 0;  // mean per tick (stage 1: over every tick)
   double wall_s = 0;               // pipeline time alone
