@@ -19,16 +19,6 @@ for r in $(seq 1 15); do
     echo "$w $r $v" | tee -a $D/bench-s41.raw
   done
 done
-/usr/bin/python3 - $D/bench-s41.raw >> $out <<'PY'
-import sys, statistics as st
-o, n = [], []
-for line in open(sys.argv[1]):
-    w, r, v = line.split()
-    (o if w == 'old' else n).append(float(v))
-print('old', ' '.join(f'{x:.1f}' for x in o))
-print('new', ' '.join(f'{x:.1f}' for x in n))
-print('new/old per round', ' '.join(f'{b/a:.3f}' for a, b in zip(o, n)))
-print(f'median old {st.median(o):.1f}, new {st.median(n):.1f} (x{st.median(n)/st.median(o):.3f})')
-PY
+/usr/bin/python3 benchmarks/training/alternating_rounds.py $D/bench-s41.raw >> $out
 echo "# peak after the rounds: $($Y bench kernels --quick 2>&1 | grep -i "^peak" | head -1)" >> $out
 cat $out
