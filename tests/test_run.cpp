@@ -465,6 +465,19 @@ TEST_CASE("run: run.mask_mirror's margin redoes stage 1 mirrored exactly where i
   REQUIRE(r.code == 0);
   CHECK(yelan::test::contains(r.out + r.err, "stage 1 ran again on the mirrored input on"));
   CHECK(run_cli({"run", "--weights", w, d / "r.yelan.h5", "--mask-mirror", "0.5"}).code == 2);
+  // A model mirrored on every run (run.mask_mirror true) is not mirrored again by a margin.
+  const std::string always = d / "always.h5";
+  REQUIRE(run_cli({"weights", "combine", "--mask", w, "--pose", w, "--config",
+                   std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s42-mirror.json",
+                   "-o", always}).code == 0);
+  yelan::run::RunOptions o;
+  o.beta = 1.01;
+  o.mask_mirror_doubt = 1e-9;
+  yelan::run::PosePipeline pipe(always, 346, 260, o);
+  std::vector<float> always_shares;
+  yelan::run::run_file(pipe, d / "r.yelan.h5", 500000, [&](const yelan::run::Pose& p) { always_shares.push_back(p.mask_share); });
+  CHECK(pipe.stats().mirror_runs == 0);
+  CHECK(always_shares == mirrored);
 }
 
 TEST_CASE("run: mask.role presence: stage 1 says whether anyone is there, stage 2 reads the whole TORE", "[run][cli]") {

@@ -188,7 +188,7 @@ struct PosePipeline::Impl {
     const ModelConfig& cfg = nets.cfg;
     layers::NoGrad no_grad;
     if (cfg.runs_stage1()) nets.mask.forward(unmasked.act);
-    if (cfg.runs_stage1() && cfg.mask_mirror_doubt > 0) nets.mask.add_mirror(unmasked.act);
+    if (cfg.runs_stage1() && cfg.mask_mirror_doubt > 0 && !cfg.mask_mirror) nets.mask.add_mirror(unmasked.act);
     const layers::Act& x = cfg.bidirectional ? window.act : frame.act;
     const int frames = cfg.bidirectional ? cfg.window : 1;
     if (crop > 0) nets.pose.forward_cropped(x, {0, 0, x.w, x.h}, frames);
@@ -256,7 +256,7 @@ struct PosePipeline::Impl {
   }
   bool in_doubt(float share) const {
     const double d = nets.cfg.mask_mirror_doubt, p = presence_of(share);
-    return d > 0 && p >= d && p <= 1 - d;
+    return d > 0 && !nets.cfg.mask_mirror && p >= d && p <= 1 - d;  // mask_mirror true: mirrored already
   }
 
   // What stage 2 reads behind mask `use` (its own cut or grown where the config says so), and its box.
