@@ -122,7 +122,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.depth_tau_s >= 0 && c.depth_tau_s <= 60, "run.depth_tau_s must lie in 0..60 (seconds)"},
       {c.pose_tau_s >= 0 && c.pose_tau_s <= 10, "run.pose_tau_s must lie in 0..10 (seconds)"},
       {c.idle_recheck_s >= 0 && c.idle_recheck_s <= 1, "run.idle_recheck_s must lie in 0..1 (seconds)"},
-      {c.mask_mirror_doubt >= 0 && c.mask_mirror_doubt < 0.5,
+      {ModelConfig::mask_mirror_doubt_ok(c.mask_mirror_doubt),
        "run.mask_mirror must be true, false or a P(person) margin d in (0, 0.5)"},
       {c.mask_grow >= 0 && c.mask_grow <= 64, "run.mask_grow must lie in 0..64 (input pixels)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",

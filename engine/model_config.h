@@ -108,6 +108,7 @@ struct ModelConfig {
   bool depth_forearms = true;
   bool mask_mirror = false;
   double mask_mirror_doubt = 0;  // 0: none
+  static bool mask_mirror_doubt_ok(double d) { return d >= 0 && d < 0.5; }
   double presence_a = 3.0, presence_b = 13.8;
   double presence_tau_s = 0;
   bool presence_calibrated = false;

@@ -135,6 +135,17 @@ TEST_CASE("model configs are validated with the file and key named", "[networks]
   bad = ok;
   bad.replace(bad.find("\"window\":2"), 10, "\"window\":\"2\"");
   CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("x.json.input.window: expected an integer"));
+  // run.mask_mirror: true or false (every run mirrored or none), or a margin in (0, 0.5).
+  auto with_mirror = [&](const std::string& v) {
+    std::string t = ok;
+    t.insert(t.size() - 1, ",\"run\":{\"mask_mirror\":" + v + "}");
+    return parse_model_config(t, "x.json");
+  };
+  CHECK(with_mirror("true").mask_mirror);
+  CHECK(with_mirror("0.1").mask_mirror_doubt == 0.1);
+  CHECK_FALSE(with_mirror("0.1").mask_mirror);
+  CHECK_THROWS_WITH(with_mirror("0.5"), Catch::Contains("run.mask_mirror"));
+  CHECK_THROWS_WITH(with_mirror("-0.1"), Catch::Contains("run.mask_mirror"));
   CHECK(ModelConfig::scaled(64, 0.125) == 8);
   CHECK(ModelConfig::scaled(10, 0.25) == 2);  // 2.5 rounds half to even, as Python's round()
   CHECK(ModelConfig::scaled(64, 0.001) == 1);

@@ -172,7 +172,7 @@ struct PosePipeline::Impl {
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
     if (o.mask_mirror_doubt) {
-      if (!(*o.mask_mirror_doubt >= 0 && *o.mask_mirror_doubt < 0.5))
+      if (!ModelConfig::mask_mirror_doubt_ok(*o.mask_mirror_doubt))
         throw std::invalid_argument("the mask mirror's margin must lie in [0, 0.5)");
       nets.cfg.mask_mirror_doubt = *o.mask_mirror_doubt;
     }
@@ -255,8 +255,10 @@ struct PosePipeline::Impl {
     return float(presence_probability(share, nets.cfg.presence_a, nets.cfg.presence_b));
   }
   bool in_doubt(float share) const {
-    const double d = nets.cfg.mask_mirror_doubt, p = presence_of(share);
-    return d > 0 && !nets.cfg.mask_mirror && p >= d && p <= 1 - d;  // mask_mirror true: mirrored already
+    const double d = nets.cfg.mask_mirror_doubt;
+    if (d <= 0 || nets.cfg.mask_mirror) return false;  // no margin, or every run mirrored already
+    const double p = presence_of(share);
+    return p >= d && p <= 1 - d;
   }
 
   // What stage 2 reads behind mask `use` (its own cut or grown where the config says so), and its box.
