@@ -400,7 +400,7 @@ TEST_CASE("run: run.mask_grow grows what stage 2 reads, not stage 1's masks (the
     grew += read > cut;
     reused += !grown[i].ran;
   }
-  CHECK(grew >= grown.size() / 2);
+  CHECK(std::size_t(grew) >= grown.size() / 2);
   CHECK(reused >= 5);
 }
 
@@ -1106,13 +1106,19 @@ TEST_CASE("run: weights calibrate fits presence on dancer and empty recordings a
 #include "camera/sim/recording_reader.h"
 #include "engine/run/early_exit.h"
 
-TEST_CASE("run: one pass over stage 1's logits scores every mask cut as a pass per cut does", "[run]") {
-  yelan::test::CliTempDir d("cuts");
+// A validation dancer and an empty scene of 0.6 s (seed 5) in d/ds/val.
+std::vector<std::string> dancer_and_empty(const yelan::test::CliTempDir& d) {
   REQUIRE(run_cli({"sim", "--dataset", d / "ds", "--seed", "5", "--train", "0", "--val", "1", "--test", "0", "--val-empty",
                    "1", "--duration", "0.6s", "--threads", "1"})
               .code == 0);
-  const std::vector<std::string> recs = yelan::camera::sim::list_recordings(d / "ds/val");
-  REQUIRE(recs.size() == 2);  // the empty scene is left out of the IoU
+  std::vector<std::string> recs = yelan::camera::sim::list_recordings(d / "ds/val");
+  REQUIRE(recs.size() == 2);
+  return recs;
+}
+
+TEST_CASE("run: one pass over stage 1's logits scores every mask cut as a pass per cut does", "[run]") {
+  yelan::test::CliTempDir d("cuts");
+  const std::vector<std::string> recs = dancer_and_empty(d);  // the empty scene is left out of the IoU
   const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
   const std::vector<double> cuts = {0.1, 0.5, 0.9};
   std::ostringstream progress;
@@ -1125,6 +1131,39 @@ TEST_CASE("run: one pass over stage 1's logits scores every mask cut as a pass p
   CHECK(one[0] > 0.2);          // the shipped mask net finds this dancer
   CHECK(one[0] != one[2]);      // and the cut changes what it covers
   CHECK_THROWS_AS(yelan::run::sweep_mask_cuts(w, recs, {1.0}, 50, 0.4, 0.2, progress), std::invalid_argument);
+}
+
+TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for tick as bench early-exit's sweep", "[run][cli]") {
+  yelan::test::CliTempDir d("deployed-iou");
+  const std::vector<std::string> recs = dancer_and_empty(d);
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::ostringstream progress;
+  // Stage 1 on every tick, and the shipped early exit (fresh and reused masks mixed).
+  for (const double beta : {1.01, 0.94}) {
+    const auto swept = yelan::run::sweep_beta(w, recs, {beta}, 50, 0.4, 0.2, progress);
+    yelan::run::RunOptions o;
+    o.beta = beta;
+    const auto r = yelan::run::evaluate_recordings(w, recs, 0.6, 0.2, o, progress);
+    CHECK(r.mask_ticks == swept.at(0).ticks);  // the empty scene's ticks are not scored
+    CHECK(r.mask_ticks >= 15);
+    CHECK(r.mask_iou == Approx(swept.at(0).iou).margin(1e-12));
+    // One dancer recording: every condition its name says pools the same ticks.
+    REQUIRE(!r.mask_iou_by_condition.empty());
+    for (const auto& [c, iou] : r.mask_iou_by_condition) CHECK(iou == Approx(r.mask_iou).margin(1e-12));
+    if (beta < 1) CHECK(r.mask_run_fraction < 1);
+  }
+  // The CLI's JSON carries it; simulated scenes have no true masks on disk to read: null.
+  REQUIRE(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--run", "--seconds", "0.6", "--skip", "0.2", "--threads", "1",
+                   "--json", d / "run.json"})
+              .code == 0);
+  const auto j = nlohmann::json::parse(slurp(d / "run.json"));
+  CHECK(j.at("mask_iou").get<double>() > 0.2);
+  CHECK(j.at("mask_ticks").get<int>() >= 15);
+  CHECK(j.at("mask_iou_by_condition").size() >= 2);
+  REQUIRE(run_cli({"eval", "--weights", w, "--sim", "test", "--seed", "5", "--scenes", "1", "--run", "--seconds", "0.3", "--threads",
+                   "1", "--json", d / "sim.json"})
+              .code == 0);
+  CHECK(nlohmann::json::parse(slurp(d / "sim.json")).at("mask_iou").is_null());
 }
 
 TEST_CASE("run: the chosen beta runs stage 1 least within the IoU tolerance", "[run]") {

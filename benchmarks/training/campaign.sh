@@ -154,6 +154,8 @@ DATA_FPR=${DATA_FPR:-/var/tmp/yelan-data/sk-fpr}
 DATA_FPR_MIX=${DATA_FPR_MIX:-/var/tmp/yelan-data/sk-fpr-mix}
 DATA_NEG=${DATA_NEG:-/var/tmp/yelan-data/sk-neg}
 DATA_MASK_MIX=${DATA_MASK_MIX:-/var/tmp/yelan-data/sk-mask-mix}
+DATA_S43=${DATA_S43:-/var/tmp/yelan-data/sk-s43}
+DATA_MASK_MIX2=${DATA_MASK_MIX2:-/var/tmp/yelan-data/sk-mask-mix2}
 STICK_CFG0=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json
 dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
@@ -621,6 +623,24 @@ case "$what" in
     CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX/train BATCH=32 train mask mask-s36 \
       "${MASK_S36_STEPS:-1000}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
       --seed 2 --init models/campaign/mask-s32/checkpoint.h5 ;;
+  # sk-s43 (forty-third session): stage 1's training recordings half as many again, drawn as
+  # sk-fpr and sk-neg were (seed 4: none of theirs): 160 dancers, 64 dancers in furnished rooms,
+  # 48 empty scenes, 48 furnished rooms. mask-s36 learnt its 608 (training loss 0.12 against
+  # 0.155 on validation); do new recordings lift the IoU where more steps did not?
+  # sk-mask-mix2: sk-mask-mix's 608 and these 320 (hard links), validation as sk-mask-mix's.
+  data-s43)
+    "$Y" sim --dataset "$DATA_S43" --seed 4 --train 160 --train-dancer-rooms 64 --train-empty 48 --train-rooms 48 \
+      --val 0 --test 0 --duration 5s --random-looks --frame-dancer --free-arms 0.5 --front-print 0.5-2 \
+      --threads "${THREADS:-2}"
+    mkdir -p "$DATA_MASK_MIX2/train"
+    ln -f "$DATA_MASK_MIX"/train/*.yelan.h5 "$DATA_MASK_MIX2/train/"
+    for f in "$DATA_S43"/train/*.yelan.h5; do ln -f "$f" "$DATA_MASK_MIX2/train/s4-${f##*/}"; done ;;
+  # mask-s43: mask-s36 trained 1000 steps more by its recipe on sk-mask-mix2 (lr 1e-4 cosine,
+  # windows drawn by seed 3).
+  train-mask-s43)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX2/train BATCH=32 train mask mask-s43 \
+      "${MASK_S43_STEPS:-1000}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
+      --seed 3 --init models/campaign/mask-s36/checkpoint.h5 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;

@@ -35,6 +35,15 @@ std::string presence_json(const std::map<std::string, run::PresenceReport::Condi
   return j.dump();
 }
 
+// The deployed masks' IoU, keyed as eval's frame by frame: "mask_iou" null where not measured.
+std::string mask_iou_json(const run::StreamEvalResult& r) {
+  nlohmann::ordered_json j = {{"mask_iou", r.mask_iou >= 0 ? nlohmann::ordered_json(r.mask_iou) : nlohmann::ordered_json(nullptr)},
+                              {"mask_ticks", r.mask_ticks},
+                              {"mask_iou_by_condition", r.mask_iou_by_condition}};
+  const std::string s = j.dump();
+  return s.substr(1, s.size() - 2);  // the members, spliced into the object below
+}
+
 // The deployed path: `yelan run`'s pipeline on the test scenes (events in time order, TORE of
 // everything so far, stage 1 with the model's early exit, its own depth from the body-height
 // prior), each pose scored against the label at its time; root-aligned is the figure to
@@ -91,6 +100,12 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     t << "; on " << 100.0 * double(r.empty_called_person) / double(r.empty_poses) << "% of the " << r.empty_poses
       << " poses of scenes with nobody";
   t << "\n";
+  if (r.mask_iou >= 0) {
+    t << std::setprecision(3) << "mask IoU as deployed (the mask stage 2 read: this tick's, or a future one reused): "
+      << r.mask_iou << " over " << r.mask_ticks << " ticks of dancer recordings; by condition:";
+    for (const auto& [c, iou] : r.mask_iou_by_condition) t << " " << c << " " << iou;
+    t << "\n";
+  }
   if (!r.presence_by_condition.empty()) {
     t << "presence by the conditions in the " << (spec.recordings.empty() ? "scenes'" : "recordings'") << " names (every pose in the span):\n";
     run::print_presence_by_condition(r.presence_by_condition, t);
@@ -110,7 +125,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              ", \"empty_called_person\": " + std::to_string(r.empty_called_person) +
                              ", \"head_depth_abs_error_mm\": " + std::to_string(r.depth_abs_error_mm) +
                              ", \"head_depth_ratio_median\": " + std::to_string(r.depth_ratio_median) +
-                             ", \"presence_by_condition\": " + presence_json(r.presence_by_condition) + "}\n");
+                             ", \"presence_by_condition\": " + presence_json(r.presence_by_condition) +
+                             ", " + mask_iou_json(r) + "}\n");
   if (const auto p = a.value("--poses")) camera::write_file_atomically(*p, run::scored_poses_csv(r.poses));
   return kOk;
 }

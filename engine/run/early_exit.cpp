@@ -5,47 +5,22 @@
 #include <optional>
 #include <stdexcept>
 
-#include "camera/sim/recording_windows.h"
 #include "engine/run/pipeline.h"
+#include "engine/run/true_masks.h"
 #include "engine/train/mask_overlap.h"
 
 namespace yelan::run {
 
 namespace {
 
-// A dancer recording's true masks over [skip_s, skip_s + seconds] after its first event.
-struct TrueMasks {
-  camera::sim::RecordingInfo info;
-  std::int64_t t0 = 0, end = 0;
-  std::size_t m0 = 0, m1 = 0;
-  std::vector<std::uint8_t> masks;
-
-  TrueMasks(const std::string& path, double seconds, double skip_s) : info(camera::sim::read_recording_info(path)) {
-    if (!info.dancer) return;
-    t0 = info.first_event_us + std::llround(skip_s * 1e6);
-    end = info.first_event_us + std::llround((skip_s + seconds) * 1e6);
-    m0 = std::size_t(std::lower_bound(info.mask_t.begin(), info.mask_t.end(), t0) - info.mask_t.begin());
-    m1 = std::size_t(std::upper_bound(info.mask_t.begin(), info.mask_t.end(), end) - info.mask_t.begin());
-    masks = camera::sim::read_recording_masks(path, m0, m1 - m0);
-  }
-  // The index (into info.mask_t) of the true mask at tick t_us: ticks sit on the mask times.
-  std::optional<std::size_t> index_at(std::int64_t t_us) const {
-    const auto b = info.mask_t.begin();
-    const auto it = std::lower_bound(b + std::ptrdiff_t(m0), b + std::ptrdiff_t(m1), t_us);
-    if (it == b + std::ptrdiff_t(m1) || std::llabs(*it - t_us) > 1000) return std::nullopt;
-    return std::size_t(it - b);
-  }
-  const std::uint8_t* mask(std::size_t index) const {
-    return &masks[(index - m0) * std::size_t(info.camera.width) * std::size_t(info.camera.height)];
-  }
-  RunOptions options(double rate_hz, double beta) const {
-    RunOptions opt;
-    opt.rate_hz = rate_hz;
-    opt.beta = beta;
-    opt.tick_origin_us = info.mask_t.empty() ? 0 : info.mask_t[0];
-    return opt;
-  }
-};
+// Ticks on the recording's mask clock at rate_hz, early exit at beta.
+RunOptions options_for(const TrueMasks& tm, double rate_hz, double beta) {
+  RunOptions opt;
+  opt.rate_hz = rate_hz;
+  opt.beta = beta;
+  opt.tick_origin_us = tm.info.mask_t.empty() ? 0 : tm.info.mask_t[0];
+  return opt;
+}
 
 }  // namespace
 
@@ -63,7 +38,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
       const TrueMasks tm(path, seconds, skip_s);
       if (!tm.info.dancer) continue;
       const int W = tm.info.camera.width;
-      RunOptions opt = tm.options(rate_hz, beta);
+      RunOptions opt = options_for(tm, rate_hz, beta);
       opt.mask_cut = mask_cut;
       PosePipeline pipe(weights, W, tm.info.camera.height, opt);
       const int d = pipe.mask_downscale(), mw = W / d, mh = tm.info.camera.height / d;
@@ -126,7 +101,7 @@ std::vector<double> sweep_mask_cuts(const std::string& weights, const std::vecto
     if (!tm.info.dancer) continue;
     const int W = tm.info.camera.width;
     // Stage 1 on every tick: the mask in use is always this tick's.
-    PosePipeline pipe(weights, W, tm.info.camera.height, tm.options(rate_hz, 1.01));
+    PosePipeline pipe(weights, W, tm.info.camera.height, options_for(tm, rate_hz, 1.01));
     const int d = pipe.mask_downscale(), mw = W / d, mh = tm.info.camera.height / d;
     run_file(pipe, path, tm.end, [&](const Pose& p) {
       if (p.t_us < tm.t0 || p.stale || !p.mask_ran) return;

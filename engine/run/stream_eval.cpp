@@ -6,9 +6,13 @@
 #include <sstream>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "camera/sim/recording_reader.h"
 #include "camera/sim/rng.h"
+#include "engine/run/presence.h"
+#include "engine/run/true_masks.h"
+#include "engine/train/mask_overlap.h"
 
 namespace yelan::run {
 
@@ -65,6 +69,8 @@ struct StreamScorer {
   double depth_abs = 0;
   double tick_ms = 0, tore_ms = 0, s1_ms = 0, s2_ms = 0;
   RunStats crops;  // the crop tallies of every run, for run::crop_share
+  train::MaskOverlap overlap;  // the masks in use, recordings on disk only
+  std::map<std::string, train::MaskOverlap> overlap_by_condition;
   bool keep = false;
   std::string source;  // the name the kept poses carry
 
@@ -150,6 +156,10 @@ struct StreamScorer {
     r.stage1_ms = s1_ms / timed;
     r.stage2_ms = s2_ms / timed;
     r.crop_share = crop_share(crops);
+    if (r.mask_ticks) {
+      r.mask_iou = overlap.iou();
+      for (const auto& [c, o] : overlap_by_condition) r.mask_iou_by_condition[c] = o.iou();
+    }
     if (!depth_ratio.empty()) {
       r.depth_ratio_median = percentile(depth_ratio, 0.5);
       r.depth_abs_error_mm = depth_abs / double(depth_ratio.size());
@@ -207,9 +217,24 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);
     const std::int64_t end_us = info.first_event_us + std::llround(seconds * 1e6);
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
+    std::optional<TrueMasks> truth;
+    if (info.dancer) truth.emplace(recordings[i], std::max(0.0, seconds - skip_s), skip_s);
+    const int d = pipe.mask_downscale(), mw = info.camera.width / d, mh = info.camera.height / d;
+    const std::vector<std::string> conditions = conditions_in(info.name);
     std::vector<Pose> poses;
     const auto keep = [&](const Pose& p) {
-      if (p.t_us >= skip_us && p.t_us <= end_us) poses.push_back(p);
+      if (p.t_us < skip_us || p.t_us > end_us) return;
+      poses.push_back(p);
+      // The mask in use is only readable inside the callback.
+      const std::vector<float>& in_use = pipe.last_stage1_mask();
+      if (!truth || p.stale || in_use.size() != std::size_t(mw) * std::size_t(mh)) return;
+      const auto at = truth->index_at(p.t_us);
+      if (!at) return;
+      train::MaskOverlap o;
+      train::add_mask_overlap(o, truth->mask(*at), info.camera.width, in_use.data(), mh, mw, d);
+      sc.overlap += o;
+      for (const std::string& c : conditions) sc.overlap_by_condition[c] += o;
+      ++sc.r.mask_ticks;
     };
     sc.r.wall_s += run_file(pipe, recordings[i], end_us, keep);
     sim::Joints13 joints;

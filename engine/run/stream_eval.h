@@ -6,6 +6,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <ostream>
 #include <string>
@@ -75,6 +76,12 @@ struct StreamEvalResult {
   // recordings and scenes count all their poses in the span, the dancer in the picture or not.
   std::map<std::string, PresenceReport::Condition> presence_by_condition;
   std::vector<ScoredPose> poses;  // every pose in the scored spans, when asked for (keep_poses)
+  // Recordings on disk only: at every scored tick of a dancer recording, the mask stage 1 left
+  // for stage 2 (this tick's, or a future mask early exit reused; cut, before run.mask_grow)
+  // against the true mask at the net's size, pooled; -1 where not measured (simulated scenes).
+  double mask_iou = -1;
+  std::uint64_t mask_ticks = 0;
+  std::map<std::string, double> mask_iou_by_condition;  // the condition words of the recordings' names
 };
 
 StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,
