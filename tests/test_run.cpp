@@ -1160,6 +1160,20 @@ TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for t
   CHECK(j.at("mask_iou").get<double>() > 0.2);
   CHECK(j.at("mask_ticks").get<int>() >= 15);
   CHECK(j.at("mask_iou_by_condition").size() >= 2);
+  // Without early exit the CLI runs stage 1 on every tick: the sweep's IoU at beta 1.01.
+  REQUIRE(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--run", "--seconds", "0.6", "--skip", "0.2", "--threads", "1",
+                   "--no-early-exit", "--json", d / "every.json"})
+              .code == 0);
+  const auto every = nlohmann::json::parse(slurp(d / "every.json"));
+  CHECK(every.at("mask_run_fraction").get<double>() == Approx(1));
+  CHECK(every.at("mask_iou").get<double>() == Approx(yelan::run::sweep_beta(w, recs, {1.01}, 50, 0.4, 0.2, progress).at(0).iou).margin(1e-6));
+  for (const auto& bad : {std::vector<std::string>{"--run", "--no-early-exit", "--beta", "0.9"}, {"--no-early-exit"}})
+    CHECK(run_cli([&] {
+            std::vector<std::string> v = {"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6"};
+            v.insert(v.end(), bad.begin(), bad.end());
+            return v;
+          }())
+              .code == 2);
   REQUIRE(run_cli({"eval", "--weights", w, "--sim", "test", "--seed", "5", "--scenes", "1", "--run", "--seconds", "0.3", "--threads",
                    "1", "--json", d / "sim.json"})
               .code == 0);

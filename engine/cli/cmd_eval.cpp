@@ -50,7 +50,8 @@ std::string mask_iou_json(const run::StreamEvalResult& r) {
 // compare with eval's root-aligned one.
 int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std::ostream& err) {
   run::RunOptions o;
-  o.beta = a.number_or("--beta", o.beta, 0, 1);
+  if (a.flag("--no-early-exit") && a.value("--beta")) throw UsageError("give --beta or --no-early-exit, not both");
+  o.beta = a.flag("--no-early-exit") ? 2.0 : a.number_or("--beta", o.beta, 0, 1);  // > 1: stage 1 on every tick
   if (a.value("--depth-tau")) o.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
   if (a.value("--pose-tau")) o.pose_tau_s = a.number_or("--pose-tau", 0, 0, 10);
   o.mask_grow = spec.mask_grow;
@@ -136,7 +137,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
                 "--low-light-dn", "--poses", "--depth-tau", "--pose-tau", "--mask-pictures", "--mask-grow"},
-               {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom"});
+               {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom", "--no-early-exit"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
   if (!wpath || (!simv && !data)) throw UsageError("eval needs --weights W and --sim test|PRESETS or --data DIR");
@@ -145,6 +146,8 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (data && a.value("--low-light-dn"))
     throw UsageError("--low-light-dn is for --sim scenes (a recording's light is in its events)");
   if (const auto j = a.value("--json")) check_output("--json", *j, {*wpath});
+  if (a.flag("--no-early-exit") && !a.flag("--run"))
+    throw UsageError("--no-early-exit is for eval --run (frame by frame, stage 1 runs on every frame)");
   if (const auto p = a.value("--poses")) {
     if (!a.flag("--run")) throw UsageError("--poses is for eval --run (the deployed path's poses)");
     check_output("--poses", *p, {*wpath});
