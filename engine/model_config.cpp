@@ -104,6 +104,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     if (r.contains("mask_cut_reused")) c.mask_cut_reused = get_num(r, where + ".run", "mask_cut_reused");
     if (r.contains("idle_recheck_s")) c.idle_recheck_s = get_num(r, where + ".run", "idle_recheck_s");
     if (r.contains("mask_grow")) c.mask_grow = get_int(r, where + ".run", "mask_grow");
+    if (r.contains("mask_max_age")) c.mask_max_age = get_int(r, where + ".run", "mask_max_age");
     if (r.contains("presence")) {
       const json& pr = section(r, "presence", where + ".run");
       c.presence_a = get_num(pr, where + ".run.presence", "a");
@@ -125,6 +126,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {ModelConfig::mask_mirror_doubt_ok(c.mask_mirror_doubt),
        "run.mask_mirror must be true, false or a P(person) margin d in (0, 0.5)"},
       {c.mask_grow >= 0 && c.mask_grow <= 64, "run.mask_grow must lie in 0..64 (input pixels)"},
+      {c.mask_max_age >= 0 && c.mask_max_age <= 1000, "run.mask_max_age must lie in 0..1000 (frames of 20 ms; 0: none)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",
        "mask.role must be mask, presence or none"},
       {(c.mask_role == "mask") == c.masked_input,

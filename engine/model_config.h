@@ -96,7 +96,12 @@ struct ModelConfig {
   //   twice stage 1's cost on the ticks it runs, for a net trained with --flip. A number d in
   //   (0, 0.5) instead: only where yelan run is in doubt, on the runs whose current mask alone
   //   gives P(person) in [d, 1 - d] (mask_mirror_doubt; the masks elsewhere are the plain net's).
+  //   run.mask_max_age (optional, default 0: none but the n_masks stored): while a dancer is
+  //   there, stage 1 runs again once the future mask to reuse would be this many frames (20
+  //   ms) old, whatever its score: stage 2's error grows with the age of its mask (about 1 mm
+  //   a frame from 4 frames on) while the score falls too little to see it.
   double run_beta = 0.99;
+  int mask_max_age = 0;  // 0: none
   double mask_cut = 0.1;
   std::optional<double> mask_cut_reused;  // absent: mask_cut
   double reused_mask_cut() const { return mask_cut_reused.value_or(mask_cut); }

@@ -16,6 +16,7 @@
 #include "camera/sim/presets.h"
 #include "camera/io/event_reader.h"
 #include "camera/sim/recording_reader.h"
+#include "engine/model_config.h"
 #include "engine/run/pipeline.h"
 #include "engine/run/stream_eval.h"
 
@@ -1178,6 +1179,38 @@ TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for t
                    "1", "--json", d / "sim.json"})
               .code == 0);
   CHECK(nlohmann::json::parse(slurp(d / "sim.json")).at("mask_iou").is_null());
+}
+
+TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that old, whatever its score", "[run][cli]") {
+  yelan::test::CliTempDir d("max-age");
+  const std::vector<std::string> recs = dancer_and_empty(d);
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::ostringstream progress;
+  const auto run = [&](std::optional<int> max_age) {
+    yelan::run::RunOptions o;
+    o.beta = 0.5;  // the scores alone would reuse every stored mask
+    o.mask_max_age = max_age;
+    return yelan::run::evaluate_recordings(w, recs, 0.6, 0.1, o, progress, true);
+  };
+  const auto free = run(std::nullopt), none = run(0), capped = run(3);
+  int oldest = 0, oldest_capped = 0;
+  for (const auto& p : free.poses)
+    if (p.dancer) oldest = std::max(oldest, p.pose.mask_age);
+  for (const auto& p : capped.poses)
+    if (p.dancer) oldest_capped = std::max(oldest_capped, p.pose.mask_age);
+  CHECK(oldest >= 5);  // uncapped, a chain of reused masks runs long
+  CHECK(oldest_capped == 2);
+  CHECK(capped.mask_runs > free.mask_runs);
+  // 0 is no cap: the same ticks, the same poses.
+  CHECK(none.mask_runs == free.mask_runs);
+  REQUIRE(none.poses.size() == free.poses.size());
+  for (std::size_t i = 0; i < none.poses.size(); ++i) CHECK(none.poses[i].pose.mask_age == free.poses[i].pose.mask_age);
+  // The config key: checked as every run key is.
+  const std::string cfg = slurp(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s41.json");
+  CHECK(yelan::parse_model_config(yelan::with_run_setting(cfg, "mask_max_age", "4"), "x").mask_max_age == 4);
+  CHECK(yelan::parse_model_config(cfg, "s41").mask_max_age == 0);
+  CHECK_THROWS_AS(yelan::with_run_setting(cfg, "mask_max_age", "-1"), yelan::ConfigError);
+  CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--mask-max-age", "3"}).code == 2);
 }
 
 TEST_CASE("run: the chosen beta runs stage 1 least within the IoU tolerance", "[run]") {

@@ -54,6 +54,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   o.beta = a.flag("--no-early-exit") ? 2.0 : a.number_or("--beta", o.beta, 0, 1);  // > 1: stage 1 on every tick
   if (a.value("--depth-tau")) o.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
   if (a.value("--pose-tau")) o.pose_tau_s = a.number_or("--pose-tau", 0, 0, 10);
+  if (a.value("--mask-max-age")) o.mask_max_age = a.int_value_or("--mask-max-age", 0, 0, 1000);
   o.mask_grow = spec.mask_grow;
   const bool keep = a.value("--poses").has_value();
   run::StreamEvalResult r;
@@ -136,7 +137,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
-                "--low-light-dn", "--poses", "--depth-tau", "--pose-tau", "--mask-pictures", "--mask-grow"},
+                "--low-light-dn", "--poses", "--depth-tau", "--pose-tau", "--mask-pictures", "--mask-grow", "--mask-max-age"},
                {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom", "--no-early-exit"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
@@ -146,6 +147,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (data && a.value("--low-light-dn"))
     throw UsageError("--low-light-dn is for --sim scenes (a recording's light is in its events)");
   if (const auto j = a.value("--json")) check_output("--json", *j, {*wpath});
+  if (a.value("--mask-max-age") && !a.flag("--run")) throw UsageError("--mask-max-age is for eval --run (the deployed path)");
   if (a.flag("--no-early-exit") && !a.flag("--run"))
     throw UsageError("--no-early-exit is for eval --run (frame by frame, stage 1 runs on every frame)");
   if (const auto p = a.value("--poses")) {

@@ -171,6 +171,10 @@ struct PosePipeline::Impl {
     joint_smoother = JointSmoother(nets.cfg.pose_tau_s);
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
+    if (o.mask_max_age) {
+      if (*o.mask_max_age < 0) throw std::invalid_argument("mask_max_age must be >= 0 (frames; 0: none)");
+      nets.cfg.mask_max_age = *o.mask_max_age;
+    }
     if (o.mask_mirror_doubt) {
       if (!ModelConfig::mask_mirror_doubt_ok(*o.mask_mirror_doubt))
         throw std::invalid_argument("the mask mirror's margin must lie in [0, 0.5)");
@@ -364,7 +368,8 @@ struct PosePipeline::Impl {
         run_mask = T - mask_t >= idle_recheck_us;
         hold_current = !run_mask;
       } else {
-        run_mask = scores[std::size_t(idx)] < beta || presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold;
+        run_mask = scores[std::size_t(idx)] < beta || presence_of(cues[std::size_t(idx)].share) < opt.presence_threshold ||
+                   (cfg.mask_max_age > 0 && idx >= cfg.mask_max_age);
       }
     }
     int use = hold_current ? 0 : idx;

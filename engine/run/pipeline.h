@@ -49,6 +49,8 @@ struct RunOptions {
   std::optional<double> pose_tau_s;
   // Whether the depth prior counts the forearms, instead of the model's run.depth_forearms.
   std::optional<bool> depth_forearms;
+  // run.mask_max_age instead of the model's (0: none).
+  std::optional<int> mask_max_age;
   // Seconds between stage 1's runs while it sees nobody, instead of the model's run.idle_recheck_s.
   std::optional<double> idle_recheck_s;
   // run.mask_mirror's margin d instead of the model's: stage 1 run again mirrored where its
