@@ -833,6 +833,11 @@ case "$what" in
   ship-s41)
     "$Y" weights combine --mask models/campaign/mask-s36/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
       --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s41.json -o models/default.h5 ;;
+  # The default since the forty-third session: -s41's networks with early exit capped by age
+  # (run.mask_max_age 6), presence and depth scale refitted under it (age43-commands-s43.sh).
+  ship-s43)
+    "$Y" weights combine --mask models/campaign/mask-s36/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
+      --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s43.json -o models/default.h5 ;;
   combine)
     "$Y" weights combine --mask "$RUNS/${MASK_RUN:-mask-s2}/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;
