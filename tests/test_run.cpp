@@ -1192,7 +1192,8 @@ TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that o
     o.mask_max_age = max_age;
     return yelan::run::evaluate_recordings(w, recs, 0.6, 0.1, o, progress, true);
   };
-  const auto free = run(std::nullopt), none = run(0), capped = run(3);
+  // 0 overrides the model's own cap (the shipped default's 6) with none.
+  const auto free = run(0), model = run(std::nullopt), capped = run(3);
   int oldest = 0, oldest_capped = 0;
   for (const auto& p : free.poses)
     if (p.dancer) oldest = std::max(oldest, p.pose.mask_age);
@@ -1201,10 +1202,14 @@ TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that o
   CHECK(oldest >= 5);  // uncapped, a chain of reused masks runs long
   CHECK(oldest_capped == 2);
   CHECK(capped.mask_runs > free.mask_runs);
-  // 0 is no cap: the same ticks, the same poses.
-  CHECK(none.mask_runs == free.mask_runs);
-  REQUIRE(none.poses.size() == free.poses.size());
-  for (std::size_t i = 0; i < none.poses.size(); ++i) CHECK(none.poses[i].pose.mask_age == free.poses[i].pose.mask_age);
+  // The model's own cap (run.mask_max_age in its config) applies unless overridden.
+  const int cap = yelan::parse_model_config(slurp(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s43.json"), "s43").mask_max_age;
+  REQUIRE(cap == 6);
+  int oldest_model = 0;
+  for (const auto& p : model.poses)
+    if (p.dancer) oldest_model = std::max(oldest_model, p.pose.mask_age);
+  CHECK(oldest_model <= cap - 1);
+  CHECK(model.mask_runs >= free.mask_runs);
   // The config key: checked as every run key is.
   const std::string cfg = slurp(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s41.json");
   CHECK(yelan::parse_model_config(yelan::with_run_setting(cfg, "mask_max_age", "4"), "x").mask_max_age == 4);
