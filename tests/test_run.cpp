@@ -880,8 +880,13 @@ TEST_CASE("run: presence calibration recovers a known logistic law and reports i
   CHECK(c.by_condition.at("flicker").empty_called == 1);
   CHECK(c.by_condition.at("shake").empty_ticks == 2);
   CHECK(c.by_condition.at("medium").empty_ticks == 3);
-  CHECK(c.by_condition.count("front") == 0);  // views and clips are not conditions
+  CHECK(c.by_condition.at("front").person_called == 1);  // views are conditions, characters and clips not
+  CHECK(c.by_condition.at("left").person_ticks == 1);
+  CHECK(c.by_condition.at("left").empty_ticks == 1);
+  CHECK(c.by_condition.at("back").empty_ticks == 2);
+  CHECK(c.by_condition.count("right") == 0);
   CHECK(c.by_condition.count("hana") == 0);
+  CHECK(c.by_condition.count("02_01") == 0);
   std::ostringstream text;
   print_presence_report(c, text);
   CHECK(contains(text.str(), "    flicker   dancer -; empty 33.3% of 3\n"));
@@ -1178,7 +1183,50 @@ TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for t
   REQUIRE(run_cli({"eval", "--weights", w, "--sim", "test", "--seed", "5", "--scenes", "1", "--run", "--seconds", "0.3", "--threads",
                    "1", "--json", d / "sim.json"})
               .code == 0);
-  CHECK(nlohmann::json::parse(slurp(d / "sim.json")).at("mask_iou").is_null());
+  // Simulated dancer scenes score their masks too (bench early-exit's IoU).
+  const auto sim = nlohmann::json::parse(slurp(d / "sim.json"));
+  REQUIRE(sim.at("mask_iou").is_number());
+  CHECK(sim.at("mask_iou").get<double>() > 0.2);
+  CHECK(sim.at("mask_iou").get<double>() <= 1);
+  CHECK(sim.at("mask_ticks").get<int>() >= 5);
+}
+
+TEST_CASE("run: a simulated scene's masks as deployed score as its recording's on disk, tick for tick", "[run]") {
+  // bench early-exit's mask IoU: the same scene in memory and written to a file (its seed and
+  // length as simulate_scenes drew them) give the same ticks, masks and IoU; an empty scene none.
+  // A quarter second: write_recording steps the simulator in quarters (its keyframes, hence its
+  // events, follow the steps), simulate_scenes in one go.
+  namespace sim = yelan::camera::sim;
+  yelan::test::CliTempDir d("sim-iou");
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::ostringstream log;
+  const auto scenes = yelan::run::simulate_scenes({sim::preset_spec("ben-dance3-front-high-static")}, 4, 0.15, 0.1, log);
+  const sim::SimSpec spec = scenes.at(0).sim->spec();
+  const std::string path = d / (spec.name + ".yelan.h5");
+  sim::write_recording(spec, path);
+  const double first_s = double(sim::read_recording_info(path).first_event_us) * 1e-6;
+  for (const double beta : {1.01, 0.94}) {
+    yelan::run::RunOptions o;
+    o.beta = beta;
+    const auto mem = yelan::run::evaluate_stream(w, scenes, o, true);
+    const auto disk = yelan::run::evaluate_recordings(w, {path}, 0.25 - first_s, 0.1 - first_s, o, log, true);
+    CHECK(mem.mask_ticks >= 7);
+    CHECK(mem.mask_ticks == disk.mask_ticks);
+    CHECK(mem.mask_iou > 0.2);  // the shipped mask net finds this dancer
+    CHECK(mem.mask_iou == Approx(disk.mask_iou).margin(1e-12));
+    CHECK(mem.mask_iou_by_condition.size() == 3);  // dance3 front high static: front, high, static
+    CHECK(mem.mask_iou_by_condition == disk.mask_iou_by_condition);
+    CHECK(mem.mask_runs == disk.mask_runs);
+    REQUIRE(mem.poses.size() == disk.poses.size());
+    for (std::size_t i = 0; i < mem.poses.size(); ++i) {
+      CHECK(mem.poses[i].pose.t_us == disk.poses[i].pose.t_us);
+      CHECK(mem.poses[i].pose.mask_ran == disk.poses[i].pose.mask_ran);
+      CHECK(mem.poses[i].pose.confidence == disk.poses[i].pose.confidence);
+    }
+  }
+  const auto nobody = yelan::run::evaluate_stream(w, yelan::run::simulate_scenes({sim::preset_spec("front-high-static-empty")}, 4, 0.3, 0.1, log), {});
+  CHECK(nobody.mask_ticks == 0);
+  CHECK(nobody.mask_iou == -1);
 }
 
 TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that old, whatever its score", "[run][cli]") {

@@ -608,6 +608,20 @@ case "$what" in
     "$0" ev-data-fp2
     "$0" ev-data-fpr
     "$0" ev-data-neg ;;
+  # Only what validation and calibration read (forty-fourth session, a new machine again):
+  # sk-src's and sk-src-fp2's 56 validation dancers and sk-neg's 48 validation scenes, linked
+  # into sk-mask-mix/val; about 15 min on two cores against data-s34's hour.
+  val-data)
+    for d in "$DATA_SK_SRC" "$DATA_SK_FP2 --front-print 2"; do
+      # shellcheck disable=SC2086  # the folder and, for sk-src-fp2, its flag
+      "$Y" sim --dataset $d --seed 1 --train 0 --val 32 --test 0 --train-empty 0 --val-empty 0 --duration 5s \
+        --random-looks --frame-dancer --train-rooms 0 --val-rooms 0 --train-dancer-rooms 0 --val-dancer-rooms 24 \
+        --free-arms 0.5 --threads "${THREADS:-2}"
+    done
+    "$Y" sim --dataset "$DATA_NEG" --seed 3 --train 0 --val 0 --test 0 --train-empty 0 --val-empty 24 \
+      --train-rooms 0 --val-rooms 24 --duration 5s --threads "${THREADS:-2}"
+    mkdir -p "$DATA_MASK_MIX/val"
+    ln -f "$DATA_SK_FP2"/val/*.yelan.h5 "$DATA_NEG"/val/*.yelan.h5 "$DATA_MASK_MIX/val/" ;;
   # mask-s32: the shipped stage 1 fine-tuned on sk-mask-mix with mask-s16's recipe (batch 32,
   # one mask frame, 15 windows a visit, mirrored, lr 1e-4 cosine).
   train-mask-s32)
@@ -838,6 +852,11 @@ case "$what" in
   ship-s43)
     "$Y" weights combine --mask models/campaign/mask-s36/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
       --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s43.json -o models/default.h5 ;;
+  # The default since the forty-fourth session: mask-s43 behind the same stage 2 and age cap,
+  # refitted (benchmarks/training/candidate.sh mask-s43-age6-s44 ... chose it on validation).
+  ship-s44)
+    "$Y" weights combine --mask models/campaign/mask-s43/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
+      --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s44.json -o models/default.h5 ;;
   combine)
     "$Y" weights combine --mask "$RUNS/${MASK_RUN:-mask-s2}/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;

@@ -122,7 +122,8 @@ PresenceFit fit_presence(const std::vector<PresenceSample>& samples, double tau_
 }
 
 std::vector<std::string> conditions_in(const std::string& name) {
-  static const char* const kWords[] = {"low", "medium", "high", "static", "dynamic", "occluded", "flicker", "clutter", "pan", "shake", "sweep"};
+  static const char* const kWords[] = {"front", "back",    "left",     "right",   "low", "medium", "high", "static",
+                                       "dynamic", "occluded", "flicker", "clutter", "pan", "shake",  "sweep"};
   std::vector<std::string> out;
   std::size_t start = 0;
   while (start <= name.size()) {

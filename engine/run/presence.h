@@ -99,7 +99,8 @@ void print_presence_report(const PresenceReport& r, std::ostream& out);
 
 // The simulator's condition words in a recording's name (yelan sim --dataset names files
 // SPLIT[-empty|-room|-dancer-room]-NNNNN-[who-clip-]VIEW-LIGHT-BACKGROUND[-occluded][-flicker]
-// [-clutter][-pan|-shake|-sweep]): low, static, clutter, sweep, ...
+// [-clutter][-pan|-shake|-sweep]): the view (front, back, left, right), low, static, clutter,
+// sweep, ...
 std::vector<std::string> conditions_in(const std::string& name);
 // One tick's verdict counted under each condition its recording's name says.
 void count_by_condition(std::map<std::string, PresenceReport::Condition>& by_condition, const std::string& recording,

@@ -25,6 +25,12 @@ struct Collect final : camera::sim::SimSink {
   void mask(std::int64_t t_us, const camera::sim::RenderedFrame& frame) override {
     out.mask_t.push_back(t_us);
     out.dancer_shows.push_back(std::any_of(frame.mask.begin(), frame.mask.end(), [](std::uint8_t v) { return v != 0; }));
+    if (!out.sim->spec().dancer || t_us < std::llround(out.warmup_s * 1e6) - 1000) return;
+    if (out.mask_bits.empty()) out.first_bits_tick = out.mask_t.size() - 1;
+    const std::size_t n = frame.mask.size(), base = out.mask_bits.size();
+    out.mask_bits.resize(base + (n + 63) / 64, 0);
+    for (std::size_t i = 0; i < n; ++i)
+      if (frame.mask[i]) out.mask_bits[base + i / 64] |= std::uint64_t(1) << (i % 64);
   }
 };
 
@@ -39,6 +45,15 @@ bool shows_at(const std::vector<std::int64_t>& mask_t, const std::vector<std::ui
 double total(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
 
 }  // namespace
+
+bool SimulatedScene::true_mask(std::size_t k, std::vector<std::uint8_t>& out) const {
+  const std::size_t n = std::size_t(sim->camera().width) * std::size_t(sim->camera().height), words = (n + 63) / 64;
+  if (k < first_bits_tick || (k - first_bits_tick + 1) * words > mask_bits.size()) return false;
+  const std::uint64_t* w = &mask_bits[(k - first_bits_tick) * words];
+  out.resize(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = std::uint8_t((w[i / 64] >> (i % 64)) & 1);
+  return true;
+}
 
 std::vector<SimulatedScene> simulate_scenes(const std::vector<camera::sim::SimSpec>& scenes, std::uint64_t seed,
                                             double seconds, double warmup_s, std::ostream& progress) {
@@ -69,7 +84,7 @@ struct StreamScorer {
   double depth_abs = 0;
   double tick_ms = 0, tore_ms = 0, s1_ms = 0, s2_ms = 0;
   RunStats crops;  // the crop tallies of every run, for run::crop_share
-  train::MaskOverlap overlap;  // the masks in use, recordings on disk only
+  train::MaskOverlap overlap;  // the masks in use against the true ones
   std::map<std::string, train::MaskOverlap> overlap_by_condition;
   bool keep = false;
   std::string source;  // the name the kept poses carry
@@ -86,6 +101,18 @@ struct StreamScorer {
         s.valid[std::size_t(j)] = label_valid[j];
       }
     r.poses.push_back(std::move(s));
+  }
+
+  // The mask stage 1 left for stage 2 at a tick (net size mh x mw, cells of d pixels) against
+  // the true mask then (sensor_w wide); nothing when the pipeline has no mask net.
+  void add_mask(const std::uint8_t* truth, int sensor_w, const std::vector<float>& in_use, int mh, int mw, int d,
+                const std::vector<std::string>& conditions) {
+    if (in_use.size() != std::size_t(mw) * std::size_t(mh)) return;
+    train::MaskOverlap o;
+    train::add_mask_overlap(o, truth, sensor_w, in_use.data(), mh, mw, d);
+    overlap += o;
+    for (const std::string& c : conditions) overlap_by_condition[c] += o;
+    ++r.mask_ticks;
   }
 
   // A pose of a recording or scene with nobody in it: only its verdict counts.
@@ -176,20 +203,37 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
   using Clock = std::chrono::steady_clock;
   StreamScorer sc;
   sc.keep = keep_poses;
+  RunOptions opt = run;
+  // Ticks on the scene's label and mask clock (as recordings on disk run): each mask stage 2
+  // reads is scored against the true mask of its own instant.
+  if (!opt.tick_origin_us) opt.tick_origin_us = 0;
   for (const SimulatedScene& scene : scenes) {
     sc.source = scene.sim->spec().name;
     const sim::Simulator& simulator = *scene.sim;
     const double end_s = simulator.duration_s();
-    PosePipeline pipe(weights, simulator.camera().width, simulator.camera().height, run);
+    const int W = simulator.camera().width;
+    PosePipeline pipe(weights, W, simulator.camera().height, opt);
+    const int d = pipe.mask_downscale(), mw = W / d, mh = simulator.camera().height / d;
+    const std::vector<std::string> conditions = conditions_in(sc.source);
+    const std::int64_t scored_from = std::llround(scene.warmup_s * 1e6), scored_to = std::llround(end_s * 1e6);
+    std::vector<std::uint8_t> truth;
     std::vector<Pose> poses;
-    const auto keep = [&](const Pose& p) { poses.push_back(p); };
+    const auto keep = [&](const Pose& p) {
+      poses.push_back(p);
+      // The mask in use is only readable inside the callback.
+      if (scene.mask_bits.empty() || p.stale || p.t_us < scored_from || p.t_us > scored_to) return;
+      const auto at = mask_index_near(scene.mask_t, 0, scene.mask_t.size(), p.t_us);
+      if (!at || !scene.true_mask(*at, truth)) return;
+      sc.add_mask(truth.data(), W, pipe.last_stage1_mask(), mh, mw, d, conditions);
+    };
     const auto t0 = Clock::now();
     pipe.push(scene.events, keep);
     pipe.finish(std::llround(end_s * 1e6), keep);
     sc.r.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
     for (const Pose& p : poses) {
+      // Whole microseconds (as the masks' span): the tick at the warm-up's end is scored.
+      if (p.t_us < scored_from || p.t_us > scored_to) continue;
       const double t = double(p.t_us) * 1e-6;
-      if (t < scene.warmup_s || t > end_s) continue;
       const bool dancer = simulator.spec().dancer;
       count_by_condition(sc.r.presence_by_condition, sc.source, dancer, p.person);
       if (!dancer) {  // an `-empty` scene
@@ -225,33 +269,14 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     const auto keep = [&](const Pose& p) {
       if (p.t_us < skip_us || p.t_us > end_us) return;
       poses.push_back(p);
-      // The mask in use is only readable inside the callback.
-      const std::vector<float>& in_use = pipe.last_stage1_mask();
-      if (!truth || p.stale || in_use.size() != std::size_t(mw) * std::size_t(mh)) return;
-      const auto at = truth->index_at(p.t_us);
-      if (!at) return;
-      train::MaskOverlap o;
-      train::add_mask_overlap(o, truth->mask(*at), info.camera.width, in_use.data(), mh, mw, d);
-      sc.overlap += o;
-      for (const std::string& c : conditions) sc.overlap_by_condition[c] += o;
-      ++sc.r.mask_ticks;
+      if (!truth || p.stale) return;
+      if (const auto at = truth->index_at(p.t_us))
+        sc.add_mask(truth->mask(*at), info.camera.width, pipe.last_stage1_mask(), mh, mw, d, conditions);
     };
     sc.r.wall_s += run_file(pipe, recordings[i], end_us, keep);
     sim::Joints13 joints;
     std::array<std::uint8_t, sim::kJointCount> valid{};
     std::uint64_t called = 0;
-    std::vector<std::uint8_t> shows;
-    if (info.dancer && !info.mask_t.empty()) {
-      // A few masks at a time: a recording's masks are tens of megabytes.
-      const std::size_t pixels = std::size_t(info.camera.width) * std::size_t(info.camera.height), chunk = 32;
-      for (std::size_t m = 0; m < info.mask_t.size(); m += chunk) {
-        const std::vector<std::uint8_t> px = sim::read_recording_masks(recordings[i], m, chunk);
-        for (std::size_t k = 0; k + 1 <= px.size() / pixels; ++k)
-          shows.push_back(std::any_of(px.begin() + std::ptrdiff_t(k * pixels), px.begin() + std::ptrdiff_t((k + 1) * pixels),
-                                      [](std::uint8_t v) { return v != 0; }));
-      }
-      if (shows.size() != info.mask_t.size()) shows.clear();  // fewer pictures than times: no opinion
-    }
     for (const Pose& p : poses) {
       count_by_condition(sc.r.presence_by_condition, info.name, info.dancer, p.person);
       called += p.person;
@@ -260,7 +285,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
         continue;
       }
       sim::label_at(info, p.t_us, joints, valid);
-      sc.add(p, joints, valid, shows.empty() || shows_at(info.mask_t, shows, p.t_us));
+      sc.add(p, joints, valid, truth->shows_at(p.t_us));
     }
     sc.add_run(pipe.stats());
     progress << "  [" << (i + 1) << "/" << recordings.size() << "] " << info.name << (info.dancer ? "" : " (empty)") << ": "

@@ -29,6 +29,13 @@ struct SimulatedScene {
   // true mask after occlusion is not empty): a dancer wholly behind furniture makes no events.
   std::vector<std::int64_t> mask_t;
   std::vector<std::uint8_t> dancer_shows;
+  // Scenes with a dancer: the true mask at each mask tick, one bit a pixel (row-major, width
+  // times height bits a tick, 11 kB on a DAVIS346), for the mask IoU as deployed.
+  // Kept from the warm-up's end on: bit masks of ticks first_bits_tick, first_bits_tick + 1, ...
+  std::vector<std::uint64_t> mask_bits;
+  std::size_t first_bits_tick = 0;
+  // Tick k's mask unpacked into out (width * height bytes, 1 = dancer); false where not kept.
+  bool true_mask(std::size_t k, std::vector<std::uint8_t>& out) const;
 };
 
 // Scene i runs with a seed drawn from `seed` and i, for warmup_s + seconds.
@@ -76,9 +83,9 @@ struct StreamEvalResult {
   // recordings and scenes count all their poses in the span, the dancer in the picture or not.
   std::map<std::string, PresenceReport::Condition> presence_by_condition;
   std::vector<ScoredPose> poses;  // every pose in the scored spans, when asked for (keep_poses)
-  // Recordings on disk only: at every scored tick of a dancer recording, the mask stage 1 left
-  // for stage 2 (this tick's, or a future mask early exit reused; cut, before run.mask_grow)
-  // against the true mask at the net's size, pooled; -1 where not measured (simulated scenes).
+  // At every scored tick of a dancer recording or scene, the mask stage 1 left for stage 2
+  // (this tick's, or a future mask early exit reused; cut, before run.mask_grow) against the
+  // true mask at the net's size, pooled; -1 where not measured (no dancer, or no mask net).
   double mask_iou = -1;
   std::uint64_t mask_ticks = 0;
   std::map<std::string, double> mask_iou_by_condition;  // the condition words of the recordings' names

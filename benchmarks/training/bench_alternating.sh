@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# bench_alternating.sh OLD.h5 NEW.h5 OUT.txt [NOTE]: `yelan bench run --threads-list 1` on two
+# weights files in alternating rounds (ROUNDS, default 9; SERIES=b: the old file's rounds
+# first), the kernel peak measured before and after, the per-round ratios and medians by
+# alternating_rounds.py. Machines are shared and noisy: nothing else may run beside it.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+old=$1 new=$2 out=$3 note=${4:-}
+D=${D:-/var/tmp/yelan-data} Y=${Y:-build/release/yelan}
+raw=$D/bench-alternating-$$.raw
+rm -f "$raw"
+order="new old"
+[ -n "${SERIES:-}" ] && order="old new"
+{
+  echo "# $(date -u +%F): yelan bench run --weights W --threads-list 1 --no-torch, alternating rounds ($order)"
+  echo "# CPU: $(lscpu | grep 'Model name' | sed 's/  */ /g')"
+  echo "# peak: $("$Y" bench kernels --quick 2>&1 | grep -i '^peak' | head -1)"
+  echo "# old: $old; new: $new${note:+; $note}; nothing else running"
+} > "$out"
+for r in $(seq 1 "${ROUNDS:-9}"); do
+  for w in $order; do
+    W=$old; [ "$w" = new ] && W=$new
+    log=$D/bench-alternating-$$-$w-$r.txt
+    "$Y" bench run --weights "$W" --threads-list 1 --no-torch > "$log" 2>&1
+    echo "$w $r $(awk '$2=="1" && $3+0>0 {print $3; exit}' "$log")" | tee -a "$raw"
+  done
+done
+/usr/bin/python3 benchmarks/training/alternating_rounds.py "$raw" >> "$out"
+echo "# peak after the rounds: $("$Y" bench kernels --quick 2>&1 | grep -i '^peak' | head -1)" >> "$out"
+cat "$out"
