@@ -1227,6 +1227,26 @@ TEST_CASE("run: a simulated scene's masks as deployed score as its recording's o
   const auto nobody = yelan::run::evaluate_stream(w, yelan::run::simulate_scenes({sim::preset_spec("front-high-static-empty")}, 4, 0.3, 0.1, log), {});
   CHECK(nobody.mask_ticks == 0);
   CHECK(nobody.mask_iou == -1);
+  // A windowed stage 2 hands out a window's poses after its last tick, when stage 1's masks are
+  // that tick's: only the last pose of each window is scored (a causal one scores every tick).
+  for (const bool windowed : {false, true}) {
+    std::ofstream(d / "cfg.json") << R"({"name": "micro-w", "input": {"channels": 6, "sensor_height": 260, "sensor_width": 346,
+      "downscale": 8, "window": 4}, "mask": {"width_mult": 0.125, "n_masks": 3}, "pose": {"width_mult": 0.125, "hidden": 8,
+      "stages": 2, "joints": 13, "convlstm": ")" << (windowed ? "bidirectional" : "causal") << "\"}}";
+    REQUIRE(run_cli({"weights", "init", "--config", d / "cfg.json", "--seed", "3", "-o", d / "micro.h5"}).code == 0);
+    yelan::run::RunOptions o;
+    o.beta = 1.01;
+    const auto r = yelan::run::evaluate_stream(d / "micro.h5", scenes, o, true);
+    std::uint64_t scored = 0;
+    for (const auto& sp : r.poses) scored += !sp.pose.stale;
+    REQUIRE(scored >= 7);
+    if (windowed) {
+      CHECK(r.mask_ticks >= scored / 4 - 1);
+      CHECK(r.mask_ticks <= scored / 4 + 1);
+    } else {
+      CHECK(r.mask_ticks == scored);
+    }
+  }
 }
 
 TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that old, whatever its score", "[run][cli]") {

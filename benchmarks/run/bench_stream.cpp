@@ -100,8 +100,10 @@ int sweep(const Sweep& what, const std::vector<std::string>& argv, std::ostream&
     for (const auto& row : rows) {
       const auto& r = row.r;
       char line[256];
-      std::snprintf(line, sizeof line, "%-8g %9.1f %14.1f %8.3f %9.3f %11.0f%% %8.2f %10.2f %10.2f %7.0f%% %15.2f\n", row.value,
-                    r.paper.mpjpe_mm, r.deployed.mpjpe_mm, r.paper.pck150, r.mask_iou, 100 * r.mask_run_fraction, r.ms_per_tick,
+      char iou[16] = "        -";  // not measured: no dancer scene, or no mask net
+      if (r.mask_iou >= 0) std::snprintf(iou, sizeof iou, "%9.3f", r.mask_iou);
+      std::snprintf(line, sizeof line, "%-8g %9.1f %14.1f %8.3f %s %11.0f%% %8.2f %10.2f %10.2f %7.0f%% %15.2f\n", row.value,
+                    r.paper.mpjpe_mm, r.deployed.mpjpe_mm, r.paper.pck150, iou, 100 * r.mask_run_fraction, r.ms_per_tick,
                     r.stage1_ms, r.stage2_ms, 100 * r.crop_share, r.ms_per_tick / ref_ms);
       out << line;
     }

@@ -104,7 +104,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   t << "\n";
   if (r.mask_iou >= 0) {
     t << std::setprecision(3) << "mask IoU as deployed (the mask stage 2 read: this tick's, or a future one reused): "
-      << r.mask_iou << " over " << r.mask_ticks << " ticks of dancer recordings; by condition:";
+      << r.mask_iou << " over " << r.mask_ticks << " ticks of dancer " << (spec.recordings.empty() ? "scenes" : "recordings")
+      << "; by condition:";
     for (const auto& [c, iou] : r.mask_iou_by_condition) t << " " << c << " " << iou;
     t << "\n";
   }

@@ -98,6 +98,7 @@ struct PosePipeline::Impl {
   layers::Act last_in{};
   train::Intrinsics k;
   std::int64_t dt_us, next_tick = std::numeric_limits<std::int64_t>::min();
+  std::int64_t latest_tick_us = std::numeric_limits<std::int64_t>::min();
   bool started = false;
   std::uint64_t events_since = 0;
   // stage 1
@@ -340,6 +341,7 @@ struct PosePipeline::Impl {
     const ModelConfig& cfg = nets.cfg;
     const auto t_tick = Clock::now();
     ++stats.ticks;
+    latest_tick_us = T;
     if (opt.skip_empty && events_since == 0 && have_last && !cfg.bidirectional) {
       Pose p = last;
       p.t_us = T;
@@ -603,6 +605,7 @@ const layers::Act& PosePipeline::stage1_logits() const { return impl_->nets.mask
 int PosePipeline::mask_downscale() const { return impl_->nets.cfg.downscale; }
 double PosePipeline::focal_px() const { return kFocalPx; }
 bool PosePipeline::causal() const { return !impl_->nets.cfg.bidirectional; }
+std::int64_t PosePipeline::latest_tick_us() const { return impl_->latest_tick_us; }
 
 double run_file(PosePipeline& pipe, const std::string& path, std::int64_t end_us, const std::function<void(const Pose&)>& out) {
   using Clock = std::chrono::steady_clock;

@@ -125,6 +125,10 @@ class PosePipeline {
   std::array<double, 2> presence_ab() const;  // the calibration P(person) is read with: {a, b}
   double beta() const;  // the early-exit threshold in use
   bool causal() const;
+  // The time of the latest tick. A windowed (bidirectional) stage 2 hands out a window's poses
+  // after its last tick: inside the callback the masks above are that tick's, so a pose of an
+  // earlier tick of the window (t_us before this) cannot be paired with the mask it ran with.
+  std::int64_t latest_tick_us() const;
   // For pictures, valid inside the pose callback: the TORE volume of the latest tick (2K x
   // H x W at the sensor's size), the mask stage 2 read (the model's input size; a reused
   // future mask at run.mask_cut_reused) and its downscale.

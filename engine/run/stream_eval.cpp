@@ -222,6 +222,7 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
       poses.push_back(p);
       // The mask in use is only readable inside the callback.
       if (scene.mask_bits.empty() || p.stale || p.t_us < scored_from || p.t_us > scored_to) return;
+      if (p.t_us != pipe.latest_tick_us()) return;  // a windowed stage 2's earlier tick: its mask is gone
       const auto at = mask_index_near(scene.mask_t, 0, scene.mask_t.size(), p.t_us);
       if (!at || !scene.true_mask(*at, truth)) return;
       sc.add_mask(truth.data(), W, pipe.last_stage1_mask(), mh, mw, d, conditions);
@@ -269,7 +270,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     const auto keep = [&](const Pose& p) {
       if (p.t_us < skip_us || p.t_us > end_us) return;
       poses.push_back(p);
-      if (!truth || p.stale) return;
+      if (!truth || p.stale || p.t_us != pipe.latest_tick_us()) return;  // as above
       if (const auto at = truth->index_at(p.t_us))
         sc.add_mask(truth->mask(*at), info.camera.width, pipe.last_stage1_mask(), mh, mw, d, conditions);
     };

@@ -85,7 +85,8 @@ struct StreamEvalResult {
   std::vector<ScoredPose> poses;  // every pose in the scored spans, when asked for (keep_poses)
   // At every scored tick of a dancer recording or scene, the mask stage 1 left for stage 2
   // (this tick's, or a future mask early exit reused; cut, before run.mask_grow) against the
-  // true mask at the net's size, pooled; -1 where not measured (no dancer, or no mask net).
+  // true mask at the net's size, pooled; -1 where not measured (no dancer, or no mask net). A
+  // windowed (bidirectional) stage 2 scores the last tick of each window only.
   double mask_iou = -1;
   std::uint64_t mask_ticks = 0;
   std::map<std::string, double> mask_iou_by_condition;  // the condition words of the recordings' names

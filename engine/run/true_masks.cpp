@@ -15,7 +15,10 @@ TrueMasks::TrueMasks(const std::string& path, double seconds, double skip_s) : i
   masks = camera::sim::read_recording_masks(path, m0, m1 - m0);
   // Fewer pictures than times (a truncated file): the span ends where the pictures do.
   const std::size_t pixels = std::size_t(info.camera.width) * std::size_t(info.camera.height);
-  if (pixels && masks.size() / pixels < m1 - m0) m1 = m0 + masks.size() / pixels;
+  if (pixels && masks.size() / pixels < m1 - m0) {
+    m1 = m0 + masks.size() / pixels;
+    truncated = true;
+  }
   for (std::size_t k = m0; k < m1; ++k) {
     const std::uint8_t* m = mask(k);
     shows.push_back(std::any_of(m, m + pixels, [](std::uint8_t v) { return v != 0; }));
@@ -33,7 +36,7 @@ std::optional<std::size_t> mask_index_near(const std::vector<std::int64_t>& time
 std::optional<std::size_t> TrueMasks::index_at(std::int64_t t_us) const { return mask_index_near(info.mask_t, m0, m1, t_us); }
 
 bool TrueMasks::shows_at(std::int64_t t_us) const {
-  if (m1 <= m0) return true;
+  if (m1 <= m0 || (truncated && t_us > info.mask_t[m1 - 1] + 1000)) return true;
   const auto b = info.mask_t.begin();
   const auto it = std::upper_bound(b + std::ptrdiff_t(m0), b + std::ptrdiff_t(m1), t_us);
   const std::size_t k = it == b + std::ptrdiff_t(m0) ? m0 : std::size_t(it - b) - 1;

@@ -21,6 +21,7 @@ struct TrueMasks {
   std::size_t m0 = 0, m1 = 0;    // its mask indices (into info.mask_t), [m0, m1)
   std::vector<std::uint8_t> masks;
   std::vector<std::uint8_t> shows;  // per mask of the span: any pixel of the dancer
+  bool truncated = false;           // the file held fewer pictures than mask times
 
   // [skip_s, skip_s + seconds] after the first event; nothing read for a recording without a dancer.
   TrueMasks(const std::string& path, double seconds, double skip_s);
@@ -29,7 +30,8 @@ struct TrueMasks {
   std::optional<std::size_t> index_at(std::int64_t t_us) const;
   const std::uint8_t* mask(std::size_t index) const;
   // Whether any pixel of the dancer shows at t_us: the latest mask of the span at or before it
-  // (the span's first before it); true where the span holds no mask (no opinion).
+  // (the span's first before it: ticks on the mask clock start on a mask); true where the span
+  // holds no mask, or past the last picture of a truncated file (no opinion).
   bool shows_at(std::int64_t t_us) const;
 };
 
