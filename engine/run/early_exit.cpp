@@ -43,7 +43,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
       PosePipeline pipe(weights, W, tm.info.camera.height, opt);
       const int d = pipe.mask_downscale(), mw = W / d, mh = tm.info.camera.height / d;
       const auto score = [&](const Pose& p) {
-        if (p.t_us < tm.t0 || p.stale || p.t_us != pipe.latest_tick_us()) return;  // see latest_tick_us
+        if (p.t_us < tm.t0 || !pipe.masks_are_for(p)) return;
         const auto here = tm.index_at(p.t_us);
         if (!here) return;
         const std::uint8_t* truth = tm.mask(*here);
@@ -104,7 +104,7 @@ std::vector<double> sweep_mask_cuts(const std::string& weights, const std::vecto
     PosePipeline pipe(weights, W, tm.info.camera.height, options_for(tm, rate_hz, 1.01));
     const int d = pipe.mask_downscale(), mw = W / d, mh = tm.info.camera.height / d;
     run_file(pipe, path, tm.end, [&](const Pose& p) {
-      if (p.t_us < tm.t0 || p.stale || !p.mask_ran || p.t_us != pipe.latest_tick_us()) return;
+      if (p.t_us < tm.t0 || !p.mask_ran || !pipe.masks_are_for(p)) return;
       const auto here = tm.index_at(p.t_us);
       if (!here) return;
       const std::uint8_t* truth = tm.mask(*here);

@@ -129,6 +129,9 @@ class PosePipeline {
   // after its last tick: inside the callback the masks above are that tick's, so a pose of an
   // earlier tick of the window (t_us before this) cannot be paired with the mask it ran with.
   std::int64_t latest_tick_us() const;
+  // Inside the callback: whether the masks below are the ones pose p ran with (a fresh tick,
+  // the latest one), what scoring a mask against the truth at p's time needs.
+  bool masks_are_for(const Pose& p) const { return !p.stale && p.t_us == latest_tick_us(); }
   // For pictures, valid inside the pose callback: the TORE volume of the latest tick (2K x
   // H x W at the sensor's size), the mask stage 2 read (the model's input size; a reused
   // future mask at run.mask_cut_reused) and its downscale.

@@ -219,10 +219,11 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
     std::vector<std::uint8_t> truth;
     std::vector<Pose> poses;
     const auto keep = [&](const Pose& p) {
+      // Whole microseconds (as the masks' span): the tick at the warm-up's end is scored.
+      if (p.t_us < scored_from || p.t_us > scored_to) return;
       poses.push_back(p);
       // The mask in use is only readable inside the callback.
-      if (scene.mask_bits.empty() || p.stale || p.t_us < scored_from || p.t_us > scored_to) return;
-      if (p.t_us != pipe.latest_tick_us()) return;  // a windowed stage 2's earlier tick: its mask is gone
+      if (scene.mask_bits.empty() || !pipe.masks_are_for(p)) return;
       const auto at = mask_index_near(scene.mask_t, 0, scene.mask_t.size(), p.t_us);
       if (!at || !scene.true_mask(*at, truth)) return;
       sc.add_mask(truth.data(), W, pipe.last_stage1_mask(), mh, mw, d, conditions);
@@ -232,8 +233,6 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
     pipe.finish(std::llround(end_s * 1e6), keep);
     sc.r.wall_s += std::chrono::duration<double>(Clock::now() - t0).count();
     for (const Pose& p : poses) {
-      // Whole microseconds (as the masks' span): the tick at the warm-up's end is scored.
-      if (p.t_us < scored_from || p.t_us > scored_to) continue;
       const double t = double(p.t_us) * 1e-6;
       const bool dancer = simulator.spec().dancer;
       count_by_condition(sc.r.presence_by_condition, sc.source, dancer, p.person);
@@ -270,7 +269,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     const auto keep = [&](const Pose& p) {
       if (p.t_us < skip_us || p.t_us > end_us) return;
       poses.push_back(p);
-      if (!truth || p.stale || p.t_us != pipe.latest_tick_us()) return;  // as above
+      if (!truth || !pipe.masks_are_for(p)) return;
       if (const auto at = truth->index_at(p.t_us))
         sc.add_mask(truth->mask(*at), info.camera.width, pipe.last_stage1_mask(), mh, mw, d, conditions);
     };
