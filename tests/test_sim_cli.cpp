@@ -113,6 +113,12 @@ TEST_CASE("yelan sim: bad arguments exit 2 and name the problem", "[cli][sim]") 
   CHECK(j.code == 2);
   CHECK(has(j.err, "unknown key 'colour'"));
   CHECK_FALSE(std::filesystem::exists(d / "x.yelan.h5"));
+  // A dataset's condition filter names its unknown word, and nothing is simulated.
+  const Result o = cli({"sim", "--dataset", d / "ds", "--train", "1", "--val", "0", "--test", "0", "--only", "low-dim"});
+  CHECK(o.code == 2);
+  CHECK(has(o.err, "unknown scene word 'dim'"));
+  const std::filesystem::path made = std::filesystem::path(d / "ds") / "train";
+  CHECK((!std::filesystem::exists(made) || std::filesystem::is_empty(made)));
   const Result l = cli({"sim", "--list"});
   CHECK(l.code == 0);
   CHECK(has(l.out, "kurt"));

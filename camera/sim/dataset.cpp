@@ -5,6 +5,7 @@
 
 #include <cerrno>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
@@ -190,6 +191,41 @@ SimSpec dataset_room_member(const std::string& split, int i, std::uint64_t seed,
 
 std::string dataset_file_name(const SimSpec& spec) { return spec.name + ".yelan.h5"; }
 
+std::vector<std::string> scene_words(const SimSpec& spec) {
+  std::vector<std::string> out;
+  std::istringstream in(scene_suffix(spec));
+  for (std::string w; std::getline(in, w, '-');) out.push_back(w);
+  return out;
+}
+
+bool scene_matches(const std::vector<std::string>& words, const std::vector<std::string>& only) {
+  static const std::vector<std::string> known = {"front", "back",     "left",    "right",   "high",  "medium", "low",
+                                                 "static", "dynamic", "occluded", "flicker", "clutter", "still", "pan",
+                                                 "shake",  "sweep"};
+  bool any = only.empty();
+  for (const std::string& cond : only) {
+    bool all = true;
+    std::istringstream in(cond);
+    std::string w;
+    int n = 0;
+    while (std::getline(in, w, '-')) {
+      ++n;
+      if (std::find(known.begin(), known.end(), w) == known.end())
+        throw std::invalid_argument("dataset condition '" + cond + "': unknown scene word '" + w +
+                                    "' (expected words of front back left right high medium low static dynamic occluded "
+                                    "flicker clutter still pan shake sweep, joined by '-')");
+      // A still camera is the absence of a motion word in the name.
+      const bool has = w == "still" ? std::none_of(words.begin(), words.end(),
+                                                   [](const std::string& x) { return x == "pan" || x == "shake" || x == "sweep"; })
+                                    : std::find(words.begin(), words.end(), w) != words.end();
+      all = all && has;
+    }
+    if (n == 0) throw std::invalid_argument("dataset condition '" + cond + "': no scene word");
+    any = any || all;
+  }
+  return any;
+}
+
 void remix_member_arms(SimSpec& s, std::uint64_t seed, int i, bool room, double p) {
   if (!(p >= 0 && p <= 1)) throw std::invalid_argument("dataset: the share of remixed arms must be in 0..1");
   if (p == 0 || !s.dancer) return;
@@ -341,6 +377,11 @@ int make_dataset(const DatasetSpec& d, std::ostream& err) {
   for (Job& j : jobs) {
     set_low_light_dn(j.spec.scene, d.low_light_dn);
     j.spec.front_print = member_front_print(j.split, j.spec, d.seed, d.front_print, print_max);
+  }
+  if (!d.only.empty()) {
+    scene_matches({}, d.only);  // every condition checked, even where no member is drawn
+    std::erase_if(jobs, [&](const Job& j) { return !scene_matches(scene_words(j.spec), d.only); });
+    manifest["only"] = d.only;
   }
   // Temporary files of a run that was killed (name.tmp-PID-XXXXXX, its process gone) are removed:
   // their recordings are simulated again.

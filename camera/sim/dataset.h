@@ -65,6 +65,12 @@ struct DatasetSpec {
   // [front_print, front_print_max] from its own stream, so a net learns the cue at every
   // strength and no split depends on one outfit (scene.json names the drawn scale).
   double front_print_max = 1;
+  // Only the members whose scene matches one of these conditions are made (none: every
+  // member): each is a set of scene words joined by '-' ("low-sweep", "flicker"), all of them
+  // among the words of the member's scene (its name after motion: view, light, background,
+  // occluded, flicker, clutter, camera motion). The counts above are the members drawn, the
+  // kept ones keep their index and bytes: a stage-1 fine-tune on what fails, drawn as always.
+  std::vector<std::string> only;
   int threads = 0;            // recordings simulated at once; 0: all cores
   bool progress_tty = false;  // a live line (else a line per recording)
 };
@@ -82,6 +88,11 @@ SimSpec dataset_room_member(const std::string& split, int i, std::uint64_t seed,
 SimSpec dataset_dancer_room_member(const std::string& split, int i, std::uint64_t seed, double duration_s,
                                    bool random_looks = false, bool frame_dancer = false);
 std::string dataset_file_name(const SimSpec& spec);
+// The words of a member's scene ("front", "low", "static", "flicker", "sweep", ...).
+std::vector<std::string> scene_words(const SimSpec& spec);
+// Whether a member with these scene words is kept under DatasetSpec::only (empty: always).
+// Throws std::invalid_argument on a condition with an unknown or empty word.
+bool scene_matches(const std::vector<std::string>& words, const std::vector<std::string>& only);
 // Training dancer i of a dataset of `seed` with share p of remixed arms: sets its arm
 // offsets and appends "-remix" to its name when the draw says so (room: a dancer-room member).
 void remix_member_arms(SimSpec& spec, std::uint64_t seed, int i, bool room, double p);

@@ -200,6 +200,11 @@ int run_dataset(const std::string& dir, const Args& a, std::ostream& out, std::o
   } else {
     d.front_print = d.front_print_max = a.number_or("--front-print", 1, 0, 3);
   }
+  if (const auto only = a.value("--only")) {
+    std::istringstream in(*only);
+    for (std::string c; std::getline(in, c, ',');) d.only.push_back(c);
+    if (d.only.empty()) throw UsageError("--only: expected conditions such as low-sweep,flicker");
+  }
   d.threads = a.int_value_or("--threads", 0, 0, 256);
   d.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   try {
@@ -241,7 +246,7 @@ int cmd_sim(const std::vector<std::string>& argv, std::ostream& out, std::ostrea
                {"--preset", "--config", "--seed", "--duration", "-o", "--preview", "--preview-every", "--threads",
                 "--grid", "--out-dir", "--characters", "--motions", "--views", "--lights", "--backgrounds", "--limit", "--splits", "--scenes",
                 "--dataset", "--train", "--val", "--test", "--train-empty", "--val-empty", "--test-empty", "--low-light-dn", "--remix-arms", "--free-arms",
-                "--front-print",
+                "--front-print", "--only",
                 "--train-rooms", "--val-rooms", "--test-rooms", "--train-dancer-rooms", "--val-dancer-rooms",
                 "--test-dancer-rooms"},
                {"--list", "--quiet", "--force", "--random-looks", "--frame-dancer"});

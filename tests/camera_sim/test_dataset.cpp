@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -430,4 +431,50 @@ TEST_CASE("dataset: remixed arms keep every bone, take the arm's pose from its o
   CHECK(remixed < 130);
   SimSpec m = dataset_member("train", 3, 1, 5.0, true, true);
   CHECK_THROWS_AS(remix_member_arms(m, 1, 3, false, 1.5), std::invalid_argument);
+}
+
+TEST_CASE("dataset: --only makes the members of the named conditions alone, each as it is without --only", "[sim]") {
+  CHECK(scene_matches({"front", "low", "static", "clutter", "sweep"}, {"low-sweep"}));
+  CHECK_FALSE(scene_matches({"front", "high", "static", "clutter", "sweep"}, {"low-sweep"}));
+  CHECK(scene_matches({"front", "high", "static", "flicker"}, {"low-sweep", "flicker"}));
+  CHECK(scene_matches({"left", "medium", "dynamic"}, {}));
+  CHECK(scene_matches({"left", "medium", "dynamic"}, {"still"}));
+  CHECK_FALSE(scene_matches({"left", "medium", "dynamic", "pan"}, {"still"}));
+  CHECK_THROWS_WITH(scene_matches({"front"}, {"dim-sweep"}), Catch::Contains("'dim'"));
+  CHECK_THROWS_WITH(scene_matches({"front"}, {""}), Catch::Contains("no scene word"));
+  // The words are the name's: view, light, background, then what the scene has.
+  const SimSpec r = dataset_room_member("train", 3, 7, 0.5);
+  const std::vector<std::string> w = scene_words(r);
+  REQUIRE(w.size() >= 4);
+  CHECK(r.name.ends_with(w.back()));
+  CHECK(std::find(w.begin(), w.end(), "clutter") != w.end());
+
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("yelan-dataset-only-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  DatasetSpec d;
+  d.out_dir = dir.string();
+  d.seed = 7;
+  d.train = d.val = d.test = 0;
+  d.train_rooms = 8;
+  d.duration_s = 0.5;
+  d.threads = 2;
+  d.only = {"sweep"};
+  int sweeping = 0;
+  for (int i = 0; i < d.train_rooms; ++i) sweeping += dataset_room_member("train", i, 7, 0.5).name.ends_with("-sweep");
+  REQUIRE(sweeping > 0);
+  REQUIRE(sweeping < d.train_rooms);  // the seed draws both kinds, or the test proves nothing
+  std::ostringstream log;
+  CHECK(make_dataset(d, log) == sweeping);
+  for (int i = 0; i < d.train_rooms; ++i) {
+    const SimSpec m = dataset_room_member("train", i, 7, 0.5);
+    CHECK(std::filesystem::exists(dir / "train" / dataset_file_name(m)) == m.name.ends_with("-sweep"));
+  }
+  std::ifstream in(dir / "manifest.json");
+  const nlohmann::json man = nlohmann::json::parse(in);
+  CHECK(man["only"] == nlohmann::json::array({"sweep"}));
+  CHECK(man["recordings"].size() == std::size_t(sweeping));
+  d.only = {"sweep-dim"};
+  CHECK_THROWS_WITH(make_dataset(d, log), Catch::Contains("'dim'"));
+  std::filesystem::remove_all(dir);
 }
