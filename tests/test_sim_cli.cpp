@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "camera/sim/dataset.h"
 #include "cli_util.h"
 
 using yelan::test::slurp;
@@ -117,6 +118,13 @@ TEST_CASE("yelan sim: bad arguments exit 2 and name the problem", "[cli][sim]") 
   const Result o = cli({"sim", "--dataset", d / "ds", "--train", "1", "--val", "0", "--test", "0", "--only", "low-dim"});
   CHECK(o.code == 2);
   CHECK(has(o.err, "unknown scene word 'dim'"));
+  const Result help = cli({"sim", "--help"});
+  std::string text = help.out + help.err;
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  for (const std::string& w : yelan::camera::sim::scene_vocabulary()) {
+    INFO(w);
+    CHECK((has(text, " " + w + " ") || has(text, " " + w + ")")));
+  }
   const std::filesystem::path made = std::filesystem::path(d / "ds") / "train";
   CHECK((!std::filesystem::exists(made) || std::filesystem::is_empty(made)));
   const Result l = cli({"sim", "--list"});

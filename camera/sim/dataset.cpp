@@ -64,12 +64,23 @@ void draw_scene(Rng& r, const SceneDraw& d, double duration_s, SimSpec& s) {
   s.seed = r.bits() & 0xffffffffffffull;
 }
 
+// The scene words that no name function of scene.h gives; scene_suffix and scene_vocabulary
+// read them here alone.
+constexpr const char* kStaticWord = "static";
+constexpr const char* kDynamicWord = "dynamic";
+constexpr const char* kOccludedWord = "occluded";
+constexpr const char* kFlickerWord = "flicker";
+constexpr const char* kClutterWord = "clutter";
+
+std::string and_word(bool on, const char* word) { return on ? std::string("-") + word : std::string(); }
+
 // "<view>-<light>-<bg>[-occluded][-flicker][-clutter][-pan|-shake|-sweep]"
 std::string scene_suffix(const SimSpec& s) {
   return std::string(view_name(s.scene.view)) + "-" + light_name(s.scene.light) + "-" +
-         (s.scene.background == SceneConfig::dynamic ? "dynamic" : "static") + (s.scene.occluders ? "-occluded" : "") +
-         (s.scene.flicker ? "-flicker" : "") + (s.scene.clutter ? "-clutter" : "") +
-         (s.scene.camera_motion == SceneConfig::still ? "" : std::string("-") + camera_motion_name(s.scene.camera_motion));
+         (s.scene.background == SceneConfig::dynamic ? kDynamicWord : kStaticWord) +
+         and_word(s.scene.occluders, kOccludedWord) + and_word(s.scene.flicker, kFlickerWord) +
+         and_word(s.scene.clutter, kClutterWord) +
+         and_word(s.scene.camera_motion != SceneConfig::still, camera_motion_name(s.scene.camera_motion));
 }
 
 }  // namespace
@@ -198,10 +209,21 @@ std::vector<std::string> scene_words(const SimSpec& spec) {
   return out;
 }
 
+const std::vector<std::string>& scene_vocabulary() {
+  static const std::vector<std::string> words = [] {
+    std::vector<std::string> out;
+    for (View v : {View::front, View::back, View::left, View::right}) out.push_back(view_name(v));
+    for (LightLevel l : {LightLevel::high, LightLevel::medium, LightLevel::low}) out.push_back(light_name(l));
+    out.insert(out.end(), {kStaticWord, kDynamicWord, kOccludedWord, kFlickerWord, kClutterWord});
+    for (int m : {SceneConfig::still, SceneConfig::pan, SceneConfig::shake, SceneConfig::sweep})
+      out.push_back(camera_motion_name(m));
+    return out;
+  }();
+  return words;
+}
+
 bool scene_matches(const std::vector<std::string>& words, const std::vector<std::string>& only) {
-  static const std::vector<std::string> known = {"front", "back",     "left",    "right",   "high",  "medium", "low",
-                                                 "static", "dynamic", "occluded", "flicker", "clutter", "still", "pan",
-                                                 "shake",  "sweep"};
+  const std::vector<std::string>& known = scene_vocabulary();
   bool any = only.empty();
   for (const std::string& cond : only) {
     bool all = true;
@@ -210,14 +232,19 @@ bool scene_matches(const std::vector<std::string>& words, const std::vector<std:
     int n = 0;
     while (std::getline(in, w, '-')) {
       ++n;
-      if (std::find(known.begin(), known.end(), w) == known.end())
-        throw std::invalid_argument("dataset condition '" + cond + "': unknown scene word '" + w +
-                                    "' (expected words of front back left right high medium low static dynamic occluded "
-                                    "flicker clutter still pan shake sweep, joined by '-')");
+      if (std::find(known.begin(), known.end(), w) == known.end()) {
+        std::string list;
+        for (const std::string& k : known) list += (list.empty() ? "" : " ") + k;
+        throw std::invalid_argument("dataset condition '" + cond + "': unknown scene word '" + w + "' (expected words of " +
+                                    list + ", joined by '-')");
+      }
       // A still camera is the absence of a motion word in the name.
-      const bool has = w == "still" ? std::none_of(words.begin(), words.end(),
-                                                   [](const std::string& x) { return x == "pan" || x == "shake" || x == "sweep"; })
-                                    : std::find(words.begin(), words.end(), w) != words.end();
+      const auto moving = [](const std::string& x) {
+        return x == camera_motion_name(SceneConfig::pan) || x == camera_motion_name(SceneConfig::shake) ||
+               x == camera_motion_name(SceneConfig::sweep);
+      };
+      const bool has = w == camera_motion_name(SceneConfig::still) ? std::none_of(words.begin(), words.end(), moving)
+                                                                   : std::find(words.begin(), words.end(), w) != words.end();
       all = all && has;
     }
     if (n == 0) throw std::invalid_argument("dataset condition '" + cond + "': no scene word");

@@ -90,6 +90,9 @@ SimSpec dataset_dancer_room_member(const std::string& split, int i, std::uint64_
 std::string dataset_file_name(const SimSpec& spec);
 // The words of a member's scene ("front", "low", "static", "flicker", "sweep", ...).
 std::vector<std::string> scene_words(const SimSpec& spec);
+// Every word a scene's name may hold (scene_words' vocabulary; "still" stands for a still
+// camera, which the name leaves out).
+const std::vector<std::string>& scene_vocabulary();
 // Whether a member with these scene words is kept under DatasetSpec::only (empty: always).
 // Throws std::invalid_argument on a condition with an unknown or empty word.
 bool scene_matches(const std::vector<std::string>& words, const std::vector<std::string>& only);

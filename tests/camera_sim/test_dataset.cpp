@@ -448,6 +448,24 @@ TEST_CASE("dataset: --only makes the members of the named conditions alone, each
   REQUIRE(w.size() >= 4);
   CHECK(r.name.ends_with(w.back()));
   CHECK(std::find(w.begin(), w.end(), "clutter") != w.end());
+  // Every word a member's name holds is one --only knows, and the error lists them all.
+  const std::vector<std::string>& vocabulary = scene_vocabulary();
+  std::set<std::string> seen;
+  for (int i = 0; i < 64; ++i)
+    for (const SimSpec& m : {dataset_room_member("train", i, 7, 0.5), dataset_empty_member("val", i, 7, 0.5),
+                             dataset_dancer_room_member("train", i, 7, 0.5)})
+      for (const std::string& x : scene_words(m)) {
+        INFO(m.name);
+        CHECK(std::find(vocabulary.begin(), vocabulary.end(), x) != vocabulary.end());
+        seen.insert(x);
+      }
+  CHECK(seen.size() + 1 == vocabulary.size());  // all drawn but "still", which no name holds
+  try {
+    scene_matches({"front"}, {"dim"});
+    FAIL("an unknown word is accepted");
+  } catch (const std::invalid_argument& e) {
+    for (const std::string& x : vocabulary) CHECK_THAT(e.what(), Catch::Contains(" " + x));
+  }
 
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("yelan-dataset-only-" + std::to_string(::getpid()));
