@@ -195,6 +195,13 @@ sk_run() {
     --val-data "$dir/val" --lr 1e-3 "$@"
 }
 
+# data_neg: sk-neg, stage 1's empty scenes and furnished rooms with nobody in them (seed 3),
+# its training and validation splits (resumes).
+data_neg() {
+  "$Y" sim --dataset "$DATA_NEG" --seed 3 --train 0 --val 0 --test 0 --train-empty 64 --val-empty 24 \
+    --train-rooms 64 --val-rooms 24 --duration 5s --threads "${THREADS:-2}"
+}
+
 mkdir -p "$RUNS"
 # The targets: the case labels of the dispatch below.
 targets() { sed -n 's/^  \([a-z0-9-]*\))\( .*\)\{0,1\}$/\1/p' "$0"; }
@@ -594,8 +601,7 @@ case "$what" in
   # 480 training dancers of sk-fpr-mix with sk-neg's training scenes, sk-src-fp2's 56
   # validation dancers with sk-neg's validation scenes (hard links).
   ev-data-neg)
-    "$Y" sim --dataset "$DATA_NEG" --seed 3 --train 0 --val 0 --test 0 --train-empty 64 --val-empty 24 \
-      --train-rooms 64 --val-rooms 24 --duration 5s --threads "${THREADS:-2}"
+    data_neg
     mkdir -p "$DATA_MASK_MIX/train" "$DATA_MASK_MIX/val"
     ln -f "$DATA_FPR_MIX"/train/*.yelan.h5 "$DATA_NEG"/train/*.yelan.h5 "$DATA_MASK_MIX/train/"
     ln -f "$DATA_SK_FP2"/val/*.yelan.h5 "$DATA_NEG"/val/*.yelan.h5 "$DATA_MASK_MIX/val/" ;;
@@ -681,16 +687,15 @@ case "$what" in
   # training and CI: sk-neg's 128 training scenes (seed 3; about 17 min) made again, beside
   # sk-s45's 402 (hard links).
   data-s46)
-    "$Y" sim --dataset "$DATA_NEG" --seed 3 --train 0 --val 0 --test 0 --train-empty 64 --val-empty 24 \
-      --train-rooms 64 --val-rooms 24 --duration 5s --threads "${THREADS:-2}"
+    data_neg
     mkdir -p "$DATA_MASK_MIX3/train"
     for f in "$DATA_NEG"/train/*.yelan.h5; do ln -f "$f" "$DATA_MASK_MIX3/train/s3-${f##*/}"; done
     for f in "$DATA_S45"/train/*.yelan.h5; do ln -f "$f" "$DATA_MASK_MIX3/train/s5-${f##*/}"; done ;;
-  # mask-s46: mask-s43 trained by its recipe on sk-mask-mix3 (lr 1e-4 cosine, windows drawn by
-  # seed 5), validated on sk-mask-mix's validation as before.
+  # mask-s46: mask-s43 trained 600 steps by its recipe on sk-mask-mix3 (lr 1e-4 cosine, windows
+  # drawn by seed 5), validated on sk-mask-mix's validation as before.
   train-mask-s46)
     CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX3/train BATCH=32 train mask mask-s46 \
-      "${MASK_S46_STEPS:-800}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
+      "${MASK_S46_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
       --seed 5 --init models/campaign/mask-s43/checkpoint.h5 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
