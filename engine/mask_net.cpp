@@ -82,11 +82,16 @@ void MaskNet::add_mirror(const Act& x) {
   }
 }
 
-void MaskNet::forward_once(const Act& x) {
+void MaskNet::check_input(const Act& x) const {
   if (x.c != cfg_.channels || x.h != cfg_.height() || x.w != cfg_.width())
     throw std::invalid_argument("mask net '" + cfg_.name + "': input is " + std::to_string(x.c) + "x" + std::to_string(x.h) +
                                 "x" + std::to_string(x.w) + ", the config wants " + std::to_string(cfg_.channels) + "x" +
                                 std::to_string(cfg_.height()) + "x" + std::to_string(cfg_.width()));
+}
+
+void MaskNet::forward_once(const Act& x) {
+  check_input(x);
+  cropped_ = false;
   // mask.pool: the U-Net on the input average-pooled pool x pool, its logits resized back bilinearly
   // (pool^2 times fewer pixels; the score head reads the pooled map's top as before).
   const int pool = cfg_.mask_pool;
@@ -95,6 +100,25 @@ void MaskNet::forward_once(const Act& x) {
     in = pooled_in_ = pooled_in_buf_.get(x.n, x.c, x.h / pool, x.w / pool);
     layers::avg_pool_forward(x, pool, pooled_in_);
   }
+  const Act y = unet_top(in);
+  if (pool > 1) {
+    pooled_masks_ = pooled_masks_buf_.like(outc_.out_shape(y));
+    outc_.forward(y, pooled_masks_);
+    masks_ = masks_buf_.get(x.n, cfg_.n_masks, x.h, x.w);
+    layers::resize_bilinear_forward(pooled_masks_, masks_);
+  } else {
+    masks_ = masks_buf_.like(outc_.out_shape(y));
+    outc_.forward(y, masks_);
+  }
+  // The score head is linear up to the pooling (two 1x1 convolutions, no activation between),
+  // so pooling first gives the same features on a 1x1 map: 17% of stage 1's FLOPs and its two
+  // largest activations saved.
+  top_gap_ = top_gap_buf_.get(y.n, y.c, 1, 1);
+  layers::global_avg_pool_forward(y, top_gap_);
+  score_head(x.n);
+}
+
+Act MaskNet::unet_top(const Act& in) {
   x_[0] = inc_.forward(in);
   for (int k = 0; k < kLevels; ++k) {
     pooled_[k] = pooled_buf_[k].like(pool_[k].out_shape(x_[k]));
@@ -116,20 +140,10 @@ void MaskNet::forward_once(const Act& x) {
     layers::concat_channels(skip, padded_[k], cat_[k]);
     y = upo_[k] = up_conv_[k]->forward(cat_[k]);
   }
-  if (pool > 1) {
-    pooled_masks_ = pooled_masks_buf_.like(outc_.out_shape(y));
-    outc_.forward(y, pooled_masks_);
-    masks_ = masks_buf_.get(x.n, cfg_.n_masks, x.h, x.w);
-    layers::resize_bilinear_forward(pooled_masks_, masks_);
-  } else {
-    masks_ = masks_buf_.like(outc_.out_shape(y));
-    outc_.forward(y, masks_);
-  }
-  // The score head is linear up to the pooling (two 1x1 convolutions, no activation between),
-  // so pooling first gives the same features on a 1x1 map: 17% of stage 1's FLOPs and its two
-  // largest activations saved.
-  top_gap_ = top_gap_buf_.get(y.n, y.c, 1, 1);
-  layers::global_avg_pool_forward(y, top_gap_);
+  return y;
+}
+
+void MaskNet::score_head(int n_images) {
   s1_ = s1_buf_.like(score1_.out_shape(top_gap_));
   score1_.forward(top_gap_, s1_);
   gap_ = gap_buf_.like(score2_.out_shape(s1_));
@@ -137,16 +151,17 @@ void MaskNet::forward_once(const Act& x) {
   // gap_ is n x cb x 16 floats with zero padding: exactly fc's input when 8 w0 % 16 == 0;
   // otherwise gather the real channels.
   const int F = 8 * w_[0];
-  std::vector<float> feat(std::size_t(x.n) * F);
-  for (int n = 0; n < x.n; ++n)
+  std::vector<float> feat(std::size_t(n_images) * F);
+  for (int n = 0; n < n_images; ++n)
     for (int c = 0; c < F; ++c) feat[std::size_t(n) * F + c] = gap_.data[(std::size_t(n) * gap_.cb() + c / 16) * 16 + c % 16];
-  logits_.resize(std::size_t(x.n) * cfg_.n_masks);
-  fc_.forward(feat.data(), x.n, logits_.data());
+  logits_.resize(std::size_t(n_images) * cfg_.n_masks);
+  fc_.forward(feat.data(), n_images, logits_.data());
   scores_.resize(logits_.size());
   for (std::size_t i = 0; i < logits_.size(); ++i) scores_[i] = 1.f / (1.f + std::exp(-logits_[i]));
 }
 
 void MaskNet::backward(const Act& x, const Act& dmasks, const float* dscores) {
+  if (cropped_) throw std::logic_error("mask net: backward after forward_cropped (inference only)");
   const Act& top = upo_[kLevels - 1];
   const Act dtop = d_top_.like(top);
   zero(dtop);

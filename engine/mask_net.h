@@ -57,13 +57,36 @@ class MaskNet : public layers::Module<MaskNet> {
   // After a plain forward on x (under NoGrad): x mirrored run too and the two averaged, as
   // run.mask_mirror does (yelan run calls it where run.mask_mirror's margin says).
   void add_mirror(const layers::Act& x);
+  // Inference only (NoGrad, one frame): stage 1 computed only over `box` (input pixels; widened
+  // to multiples of 16, the U-Net's grid) and its scaled copy at each level, grown by a halo of
+  // kCropHalo cells. Every map elsewhere holds what an all-zero frame gives there (computed once
+  // per weights): a convolution at the box's edge reads the empty room's features, not zero
+  // padding, which no map of the frame holds (a net that sees the whole frame at its bottleneck
+  // lost half its IoU on small crops padded with zeros). Exact where the frame is empty outside
+  // the box but for the halo's truncation; the score head pools the frame so composed. Returns
+  // the box run (the whole frame, forward() itself, where the box is empty, covers the frame,
+  // or mask.pool > 1).
+  struct Box {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x1 <= x0 || y1 <= y0; }
+  };
+  Box forward_cropped(const layers::Act& x, Box box);
+  void weights_changed() {
+    have_zero_ = false;
+    Module::weights_changed();
+  }
   const layers::Act& masks() const { return masks_; }        // n x N logits x H x W
   const std::vector<float>& scores() const { return scores_; }  // n x N, after the sigmoid
   // dmasks: dL/dlogits (data may be null); dscores: dL/dscores (may be null).
   void backward(const layers::Act& x, const layers::Act& dmasks, const float* dscores);
 
  private:
+  void check_input(const layers::Act& x) const;
   void forward_once(const layers::Act& x);
+  // The U-Net from its input to the last up block's output (the map outc and the score head read).
+  layers::Act unet_top(const layers::Act& in);
+  // From top_gap_ (the top's mean per channel): the scores of n images.
+  void score_head(int n);
   static constexpr int kLevels = 4;  // the U-Net's depth: 4 downs, 4 ups (the architecture's, not a config's)
   ModelConfig cfg_;
   int w_[kLevels + 1];
@@ -85,6 +108,20 @@ class MaskNet : public layers::Module<MaskNet> {
   layers::Act masks_, top_gap_, s1_, gap_;  // the score head: pooled top, then its two 1x1 convolutions
   std::vector<float> logits_, scores_;
   layers::ActBuf mirror_in_buf_, mirror_masks_buf_;  // run.mask_mirror only
+  // forward_cropped (mask_net_crop.cpp): the zero frame's maps (z*) and the frame's as the last
+  // cropped run left them (c*: the zero frame's but in the boxes `written` names), per level:
+  // the down path's outputs (inc at 0), the up path's padded upsamples and outputs; the masks.
+  static constexpr int kCropHalo = 2;
+  void prepare_zero_frame(int channels);
+  std::array<layers::ActBuf, kLevels + 1> zx_, cx_;
+  std::array<layers::ActBuf, kLevels> zpad_, cpad_, zup_, cup_;
+  layers::ActBuf zmask_, cmask_;
+  std::array<Box, kLevels + 1> written_x_;
+  std::array<Box, kLevels> written_pad_, written_up_;
+  Box written_mask_;
+  std::vector<float> zero_top_sum_;  // the zero frame's top, summed per channel over the frame
+  layers::ActBuf win_a_, win_b_, win_cat_, win_out_, gap_win_;
+  bool have_zero_ = false, cropped_ = false;
   // backward only, each dL/d the activation it is named after
   layers::ActBuf d_top_;                      // the last up block's output (what outc and the score head read)
   layers::ActBuf d_gap_, d_s1_, d_top_gap_, d_top_score_;  // the score head; d_top_score_ is its share of d_top_

@@ -74,6 +74,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
   c.mask_width = get_num(m, where + ".mask", "width_mult");
   c.n_masks = get_int(m, where + ".mask", "n_masks");
   c.mask_pool = m.contains("pool") ? get_int(m, where + ".mask", "pool") : 1;
+  c.mask_crop_margin = m.contains("crop_margin") ? get_int(m, where + ".mask", "crop_margin") : 0;
   c.pose_width = get_num(p, where + ".pose", "width_mult");
   c.hidden = get_int(p, where + ".pose", "hidden");
   c.stages = get_int(p, where + ".pose", "stages");
@@ -118,6 +119,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.downscale >= 1, "input.downscale must be >= 1"},
       {c.window >= 1, "input.window must be >= 1"},
       {c.crop_margin >= 0, "pose.crop_margin must be >= 0"},
+      {c.mask_crop_margin >= 0 && c.mask_crop_margin <= 4096, "mask.crop_margin must lie in 0..4096 (input pixels; 0: the whole frame)"},
       {c.head_stride == 8 || c.head_stride == 4, "pose.head_stride must be 8 or 4"},
       {c.presence_tau_s >= 0 && c.presence_tau_s <= 60, "run.presence.tau_s must lie in 0..60 (seconds)"},
       {c.depth_tau_s >= 0 && c.depth_tau_s <= 60, "run.depth_tau_s must lie in 0..60 (seconds)"},

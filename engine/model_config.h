@@ -20,6 +20,10 @@ struct ModelConfig {
   // mask.pool: stage 1 runs on the input average-pooled k x k (k^2 fewer pixels, its cost
   // divided about so), its mask logits resized back to the input bilinearly; 1: none.
   int mask_pool = 1;
+  // mask.crop_margin > 0: at inference, while a dancer is there, stage 1 runs only on the box
+  // of its last run's masks (now and the predicted future) grown by this many input pixels
+  // (MaskNet::forward_cropped); the whole frame when nobody was there; 0: always the whole frame.
+  int mask_crop_margin = 0;
   double pose_width = 1.0;
   int hidden = 128, stages = 3, joints = 13;
   bool bidirectional = true;

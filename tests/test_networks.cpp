@@ -299,6 +299,86 @@ TEST_CASE("mask net with run.mask_mirror: under NoGrad the mean of the net on x 
   for (std::size_t i = 0; i < m.scores.size(); ++i) REQUIRE(mf.scores[i] == Approx(m.scores[i]).margin(1e-6));
 }
 
+TEST_CASE("mask net forward_cropped: the frame's masks where the frame is empty outside the box, the empty room's far from it",
+          "[networks][mask]") {
+  // A wide frame (64 x 1024) with events left of column 640; the box holds columns 0-511.
+  const std::string text =
+      R"({"name":"wide-mask","input":{"channels":6,"sensor_height":64,"sensor_width":1024,"downscale":1,"window":1},)"
+      R"("mask":{"width_mult":0.125,"n_masks":2,"crop_margin":16},"pose":{"width_mult":0.125,"hidden":4,"stages":1,"joints":13,"convlstm":"causal"}})";
+  const ModelConfig cfg = parse_model_config(text, "wide-mask");
+  CHECK(cfg.mask_crop_margin == 16);
+  MaskNet net(cfg);
+  net.init(5);
+  net.set_training(false);
+  yelan::test::Owned x(1, 6, 64, 1024, 3), inside(1, 6, 64, 1024, 3), zero(1, 6, 64, 1024);
+  x.for_each_real([&](std::size_t i) {
+    if ((i / 16) % 1024 >= 640) x.mem[i] = 0.f;
+  });
+  inside.for_each_real([&](std::size_t i) { inside.mem[i] = (i / 16) % 1024 >= 512 ? 0.f : x.mem[i]; });
+  layers::NoGrad no_grad;
+  net.forward(x.act);
+  const MaskOut full(net);
+  net.forward(inside.act);
+  const MaskOut full_inside(net);
+  net.forward(zero.act);
+  const MaskOut empty(net);
+  const MaskNet::Box ran = net.forward_cropped(x.act, {3, 5, 500, 60});
+  CHECK(ran.x0 == 0);  // widened to multiples of 16, clipped to the frame
+  CHECK(ran.y0 == 0);
+  CHECK(ran.x1 == 512);
+  CHECK(ran.y1 == 64);
+  const MaskOut crop(net);
+  REQUIRE(crop.masks.size() == full.masks.size());
+  // The U-Net sees about 122 input pixels either side (convolutions and pools down four
+  // levels and up again). The crop is the whole frame's run on the frame emptied outside the
+  // box (but for the halo's truncation, far below the logits' scale); more than 160 columns
+  // from the events outside the box, that is the frame's own run.
+  const layers::Act& m = net.masks();
+  double worst_inside = 0, worst_far = 0;
+  int ignored = 0;
+  for (int cb = 0; cb < m.cb(); ++cb)
+    for (int y = 0; y < m.h; ++y)
+      for (int col = 0; col < m.w; ++col)
+        for (int l = 0; l < 2; ++l) {
+          const std::size_t i = ((std::size_t(cb) * m.h + y) * m.w + col) * 16 + l;
+          worst_inside = std::max(worst_inside, double(std::abs(crop.masks[i] - full_inside.masks[i])));
+          if (col < 512 - 160 || col >= 640 + 160) worst_far = std::max(worst_far, double(std::abs(crop.masks[i] - full.masks[i])));
+          else ignored += std::abs(crop.masks[i] - full.masks[i]) > 1e-2f;
+          if (col >= 640 + 160) REQUIRE(crop.masks[i] == Approx(empty.masks[i]).margin(1e-5));
+        }
+  const auto [lo, hi] = std::minmax_element(full_inside.masks.begin(), full_inside.masks.end());
+  const double spread = double(*hi - *lo);
+  INFO("logits spread " << spread << ", worst inside " << worst_inside << ", far " << worst_far);
+  CHECK(worst_inside < 0.03 * spread);
+  CHECK(worst_far < 0.03 * spread);
+  CHECK(ignored > 0);  // the events outside the box are not seen: near them the masks differ
+  for (std::size_t i = 0; i < crop.scores.size(); ++i) CHECK(crop.scores[i] == Approx(full_inside.scores[i]).margin(1e-3));
+  // The whole frame as the box is forward() itself, scores too.
+  net.forward_cropped(x.act, {0, 0, 1024, 64});
+  REQUIRE(MaskOut(net).masks == full.masks);
+  REQUIRE(MaskOut(net).scores == full.scores);
+  // An empty frame cropped anywhere is the empty frame: every map outside the box already
+  // is, and the last run's writes are undone first.
+  net.forward_cropped(zero.act, {400, 0, 600, 64});
+  const MaskOut zc(net);
+  for (std::size_t i = 0; i < zc.masks.size(); ++i) REQUIRE(zc.masks[i] == Approx(empty.masks[i]).margin(1e-5));
+  for (std::size_t i = 0; i < zc.scores.size(); ++i) CHECK(zc.scores[i] == Approx(empty.scores[i]).margin(1e-5));
+  CHECK_THROWS_AS(net.backward(x.act, net.masks(), nullptr), std::logic_error);
+  // New weights make a new empty frame: the cropped run of another init equals a fresh net's.
+  net.init(6);
+  net.weights_changed();
+  MaskNet fresh(cfg);
+  fresh.init(6);
+  fresh.set_training(false);
+  net.forward_cropped(x.act, {3, 5, 500, 60});
+  fresh.forward_cropped(x.act, {3, 5, 500, 60});
+  REQUIRE(MaskOut(net).masks == MaskOut(fresh).masks);
+  REQUIRE(MaskOut(net).scores == MaskOut(fresh).scores);
+  std::string bad = text;
+  bad.replace(bad.find("\"crop_margin\":16"), 16, "\"crop_margin\":-2");
+  CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("mask.crop_margin must lie in 0..4096"));
+}
+
 TEST_CASE("causal pose net streamed a frame at a time equals the window forward", "[networks][pose]") {
   // micro: causal ConvLSTM, window 2; stream 3 frames of a longer window.
   const ModelConfig cfg = load_model_config("micro");

@@ -1286,6 +1286,47 @@ TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that o
   CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--mask-max-age", "3"}).code == 2);
 }
 
+TEST_CASE("run: mask.crop_margin runs stage 1 on its last masks' box while a dancer is there, the whole frame while nobody is", "[run][cli]") {
+  yelan::test::CliTempDir d("mask-crop");
+  const std::vector<std::string> recs = dancer_and_empty(d);
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  std::ostringstream progress;
+  const auto run = [&](const std::vector<std::string>& which, int margin) {
+    yelan::run::RunOptions o;
+    o.beta = 1.01;  // stage 1 on every tick: each run after the first may be cropped
+    o.mask_crop_margin = margin;
+    return yelan::run::evaluate_recordings(w, which, 0.6, 0.2, o, progress);
+  };
+  const auto whole = run(recs, 0), cropped = run(recs, 16);
+  CHECK(whole.mask_crop_runs == 0);
+  CHECK(whole.mask_crop_share == 1.0);
+  REQUIRE(cropped.mask_runs == whole.mask_runs);
+  CHECK(cropped.mask_crop_runs > 0);
+  CHECK(cropped.mask_crop_runs < cropped.mask_runs);  // the first run, and the empty room's, see the whole frame
+  CHECK(cropped.mask_crop_share < 0.9);
+  // The dancer's masks are the whole frame's but near the crop's borders.
+  REQUIRE(whole.mask_iou > 0.2);
+  CHECK(cropped.mask_iou == Approx(whole.mask_iou).margin(0.05));
+  // Nobody in the picture: stage 1 never crops, so a dancer walking in anywhere is seen.
+  const std::string room = recs[0].find("empty") != std::string::npos ? recs[0] : recs[1];
+  REQUIRE(room.find("empty") != std::string::npos);
+  const auto empty = run({room}, 16);
+  CHECK(empty.mask_crop_runs == 0);
+  CHECK(empty.mask_runs > 10);
+  // The config key and the flag.
+  const std::string cfg = slurp(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s44.json");
+  CHECK(yelan::parse_model_config(cfg, "s44").mask_crop_margin == 0);
+  CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--mask-crop-margin", "16"}).code == 2);
+  const auto r = run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--run", "--mask-crop-margin", "16"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.out, Catch::Contains("of the frame on the"));
+  const auto summary = run_cli({"model", "summary", "--config", std::string(YELAN_SOURCE_DIR) +
+                                "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-mcrop8-age3-s47.json"});
+  REQUIRE(summary.code == 0);
+  CHECK_THAT(summary.out, Catch::Contains("grown by 8 input pixels (mask.crop_margin)"));
+}
+
 TEST_CASE("run: the chosen beta runs stage 1 least within the IoU tolerance", "[run]") {
   using yelan::run::BetaPoint;
   const std::vector<BetaPoint> pts = {{0.5, 0.10, 0.60, 1}, {0.8, 0.30, 0.70, 1}, {0.9, 0.50, 0.79, 1}, {1.01, 1.0, 0.80, 1}};

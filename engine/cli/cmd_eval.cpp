@@ -55,6 +55,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   if (a.value("--depth-tau")) o.depth_tau_s = a.number_or("--depth-tau", 0, 0, 60);
   if (a.value("--pose-tau")) o.pose_tau_s = a.number_or("--pose-tau", 0, 0, 10);
   if (a.value("--mask-max-age")) o.mask_max_age = a.int_value_or("--mask-max-age", 0, 0, 1000);
+  if (a.value("--mask-crop-margin")) o.mask_crop_margin = a.int_value_or("--mask-crop-margin", 0, 0, 4096);
   o.mask_grow = spec.mask_grow;
   const bool keep = a.value("--poses").has_value();
   run::StreamEvalResult r;
@@ -85,6 +86,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
       << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm << " mm";
   t << "; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks";
   if (r.mirror_runs) t << " (mirrored too on " << std::setprecision(1) << 100 * r.mirror_run_fraction << "%)";
+  if (r.mask_crop_runs)
+    t << " (on " << std::setprecision(1) << 100 * r.mask_crop_share << "% of the frame on the " << r.mask_crop_runs << " runs on a crop)";
   t << "\n";
   t << std::setprecision(1) << "head depth as deployed: mean |error| " << r.depth_abs_error_mm << " mm, median estimate / truth "
     << std::setprecision(3) << r.depth_ratio_median << "\n";
@@ -120,6 +123,10 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              std::to_string(count) +
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
                              ", \"mirror_run_fraction\": " + std::to_string(r.mirror_run_fraction) +
+                             ", \"mask_crop_runs\": " + std::to_string(r.mask_crop_runs) +
+                             ", \"mask_crop_share\": " + std::to_string(r.mask_crop_share) +
+                             ", \"stage1_ms_per_tick\": " + std::to_string(r.stage1_ms) +
+                             ", \"ms_per_tick\": " + std::to_string(r.ms_per_tick) +
                              ", \"person_found\": " + std::to_string(r.person_found) +
                              ", \"person_missed\": " + std::to_string(r.person_missed) +
                              ", \"dancer_hidden\": " + std::to_string(r.dancer_hidden) +
@@ -138,7 +145,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
-                "--low-light-dn", "--poses", "--depth-tau", "--pose-tau", "--mask-pictures", "--mask-grow", "--mask-max-age"},
+                "--low-light-dn", "--poses", "--depth-tau", "--pose-tau", "--mask-pictures", "--mask-grow", "--mask-max-age",
+                 "--mask-crop-margin"},
                {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom", "--no-early-exit"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
@@ -149,6 +157,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
     throw UsageError("--low-light-dn is for --sim scenes (a recording's light is in its events)");
   if (const auto j = a.value("--json")) check_output("--json", *j, {*wpath});
   if (a.value("--mask-max-age") && !a.flag("--run")) throw UsageError("--mask-max-age is for eval --run (the deployed path)");
+  if (a.value("--mask-crop-margin") && !a.flag("--run")) throw UsageError("--mask-crop-margin is for eval --run (the deployed path)");
   if (a.flag("--no-early-exit") && !a.flag("--run"))
     throw UsageError("--no-early-exit is for eval --run (frame by frame, stage 1 runs on every frame)");
   if (const auto p = a.value("--poses")) {

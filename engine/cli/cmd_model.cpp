@@ -169,6 +169,9 @@ int summary(const Args& a, std::ostream& out) {
     out << "stage 1 on the input average-pooled " << cfg.mask_pool << " x " << cfg.mask_pool << " ("
         << cfg.height() / cfg.mask_pool << " x " << cfg.width() / cfg.mask_pool
         << "), its mask logits resized back bilinearly\n";
+  if (cfg.mask_crop_margin > 0)
+    out << "stage 1, while a dancer is there, over its last masks' box grown by " << cfg.mask_crop_margin
+        << " input pixels (mask.crop_margin): the rows below are its whole-frame runs\n";
   if (cfg.mask_mirror)
     out << "stage 1 runs twice a frame, on the input and on its mirror image, the two averaged (run.mask_mirror): its layers are listed twice\n";
   out << "per frame, as inference runs it (BN and ReLU folded into each convolution):\n";

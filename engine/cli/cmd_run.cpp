@@ -68,7 +68,8 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   std::vector<std::string> argv = argv_in;
   const CameraChoice cam = take_camera(argv);
   const Args a("run", argv, {"--weights", "--rate", "--out", "--beta", "--height-mm", "--depth-mm", "--depth-tau", "--pose-tau", "--idle-recheck", "--threads",
-                             "--mask-mirror", "--mask-max-age", "--stats-json", "--viz", "--viz-every", "--duration", "--crop-margin"},
+                             "--mask-mirror", "--mask-max-age", "--stats-json", "--viz", "--viz-every", "--duration", "--crop-margin",
+                             "--mask-crop-margin"},
                {"--no-early-exit", "--keep-empty"});
   a.expect_positionals(0, 1);
   const auto w = a.value("--weights");
@@ -117,6 +118,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   if (a.value("--mask-mirror")) opt.mask_mirror_doubt = a.number_or("--mask-mirror", 0, 0, 0.499);
   opt.skip_empty = !a.flag("--keep-empty");
   if (a.value("--crop-margin")) opt.crop_margin = a.int_value_or("--crop-margin", 0, 0, 4096);
+  if (a.value("--mask-crop-margin")) opt.mask_crop_margin = a.int_value_or("--mask-crop-margin", 0, 0, 4096);
 
   if (cam.wanted) {
     OpenCamera c = open_camera(cam.serial);

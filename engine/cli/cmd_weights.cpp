@@ -209,10 +209,11 @@ int combine(const Args& a, std::ostream& out) {
   check_output("-o", *o, {*m, *p, a.value_or("--config", "")});
   const weights::Weights wm = weights::load_weights(*m), wp = weights::load_weights(*p);
   const auto cm = weights::parse_json(wm.config_json), cp = weights::parse_json(wp.config_json);
-  // The sections that shape the networks; mask.role says only what stage 1's output is for.
+  // The sections that shape the networks; mask.role says only what stage 1's output is for,
+  // mask.crop_margin only where it runs.
   const auto shape = [](auto d, const char* key) {
     auto s = d.contains(key) ? d.at(key) : decltype(d)();
-    if (s.is_object()) s.erase("role");
+    if (s.is_object() && std::string(key) == "mask") s.erase("role"), s.erase("crop_margin");
     return s;
   };
   // Without --config the pose file's config describes the result, so it must describe the mask

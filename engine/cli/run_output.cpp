@@ -202,6 +202,9 @@ void RunSession::report(const std::string& source, double wall_s, std::ostream& 
   if (s.mask_runs)
     out << "early exit saved about " << std::setprecision(1) << run::early_exit_saved_ms(s) << " ms of stage 1 ("
         << 100 * saved_share() << "% of what the ticks would have taken with stage 1 on each)\n";
+  if (s.mask_crop_runs)
+    out << "stage 1 ran on " << std::setprecision(1) << 100 * s.mask_crop_area / double(s.mask_crop_runs)
+        << "% of the frame on " << s.mask_crop_runs << " of its " << s.mask_runs << " runs (cropped to its last masks' box)\n";
   if (s.crop_runs)
     out << "stage 2's head ran on " << std::setprecision(1) << 100 * run::crop_share(s)
         << "% of the frame on average (cropped to the mask's box)\n";

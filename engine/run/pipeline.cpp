@@ -118,6 +118,8 @@ struct PosePipeline::Impl {
   std::vector<PoseNet::CropBox> boxes;  // each mask's bounding box
   int in_use = 0;
   int crop = 0;                         // margin; 0: stage 2 on the whole frame
+  int mask_crop = 0;                    // margin; 0: stage 1 on the whole frame
+  MaskNet::Box last_stage1_crop;        // where stage 1 ran last; empty: the whole frame
   PoseNet::CropBox window_box;          // bidirectional: the union over the window's frames
   // stage 2
   int slot = 0;
@@ -149,6 +151,7 @@ struct PosePipeline::Impl {
       throw std::invalid_argument(path + ": config '" + cfg.name + "' reads " + cfg.representation +
                                   " frames; yelan run streams TORE only (the other inputs are baselines for yelan eval)");
     crop = cfg.masked_input ? (o.crop_margin >= 0 ? o.crop_margin : cfg.crop_margin) : 0;
+    mask_crop = cfg.runs_stage1() ? (o.mask_crop_margin >= 0 ? o.mask_crop_margin : cfg.mask_crop_margin) : 0;
     if (!(o.rate_hz >= 1 && o.rate_hz <= 1000)) throw std::invalid_argument("rate must be 1..1000 poses per second");
     dt_us = std::llround(1e6 / o.rate_hz);
     vol.resize(tore.volume_size());
@@ -193,6 +196,7 @@ struct PosePipeline::Impl {
     const ModelConfig& cfg = nets.cfg;
     layers::NoGrad no_grad;
     if (cfg.runs_stage1()) nets.mask.forward(unmasked.act);
+    if (cfg.runs_stage1() && mask_crop > 0) nets.mask.forward_cropped(unmasked.act, {0, 0, 1, 1});  // its zero frame
     if (cfg.runs_stage1() && cfg.mask_mirror_doubt > 0 && !cfg.mask_mirror) nets.mask.add_mirror(unmasked.act);
     const layers::Act& x = cfg.bidirectional ? window.act : frame.act;
     const int frames = cfg.bidirectional ? cfg.window : 1;
@@ -327,6 +331,30 @@ struct PosePipeline::Impl {
     return {std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
   }
 
+  // Where stage 1 runs next: its last masks' box (now and the predicted future up to the age
+  // cap, all but the empty ones) grown by mask.crop_margin; empty (the whole frame) with the
+  // margin 0, before the first run, after one that saw nobody, once the last run is older than
+  // its masks' span, and after a cropped run whose masks reach the crop's edge.
+  MaskNet::Box stage1_crop(std::int64_t T) const {
+    const ModelConfig& cfg = nets.cfg;
+    if (mask_crop <= 0 || !have_masks || presence_of(cues[0].share) < opt.presence_threshold) return {};
+    if ((T - mask_t) * kTrainFrameHz * 1e-6 >= cfg.n_masks) return {};
+    // The masks the run could be reused for: those up to run.mask_max_age (the next run's dancer is
+    // where one of them says).
+    const int last = cfg.mask_max_age > 0 ? std::min(cfg.mask_max_age, cfg.n_masks - 1) : cfg.n_masks - 1;
+    PoseNet::CropBox u;
+    for (int c = 0; c <= last && std::size_t(c) < boxes.size(); ++c) u = unite(u, boxes[std::size_t(c)]);
+    if (u.empty()) return {};
+    // A mask that reaches an edge of the last crop inside the frame may have been cut there (the
+    // dancer moved faster than its masks foresaw): the whole frame again.
+    const MaskNet::Box& c = last_stage1_crop;
+    const int W = unmasked.act.w, H = unmasked.act.h, e = 2;
+    if (!c.empty() && ((c.x0 > 0 && u.x0 < c.x0 + e) || (c.y0 > 0 && u.y0 < c.y0 + e) || (c.x1 < W && u.x1 > c.x1 - e) ||
+                       (c.y1 < H && u.y1 > c.y1 - e)))
+      return {};
+    return {u.x0 - mask_crop, u.y0 - mask_crop, u.x1 + mask_crop, u.y1 + mask_crop};
+  }
+
   void run_stage2(const layers::Act& x, int frames, const PoseNet::CropBox& box) {
     if (crop <= 0) {
       nets.pose.forward(x, frames);
@@ -386,7 +414,17 @@ struct PosePipeline::Impl {
     stats.times.tore_ms.push_back(ms_since(t0));
     t0 = Clock::now();
     if (run_mask) {
-      nets.mask.forward(unmasked.act);
+      const MaskNet::Box s1_box = stage1_crop(T);
+      last_stage1_crop = {};
+      if (s1_box.empty()) {
+        nets.mask.forward(unmasked.act);
+      } else {
+        const MaskNet::Box ran = nets.mask.forward_cropped(unmasked.act, s1_box);
+        const double share = frame_share({ran.x0, ran.y0, ran.x1, ran.y1}, unmasked.act);
+        stats.mask_crop_area += share;
+        ++stats.mask_crop_runs;
+        if (share < 1) last_stage1_crop = ran;
+      }
       const layers::Act& m = nets.mask.masks();
       input::mask_cut_all(m, 0, float(cfg.mask_cut), masks, extents);
       if (in_doubt(float(extents[0].kept) / float(m.pixels()))) {

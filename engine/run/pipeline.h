@@ -31,6 +31,8 @@ struct RunOptions {
   bool skip_empty = true;     // no events since the last tick: repeat the last pose
   int crop_margin = -1;       // stage 2's head on the mask's box grown by this many input
                               // pixels (0: whole frame; -1: the model's pose.crop_margin)
+  int mask_crop_margin = -1;  // stage 1 on its last masks' box grown by this many input pixels
+                              // while a dancer is there (0: whole frame; -1: the model's mask.crop_margin)
   // Ticks at origin + k / rate (e.g. 0: on a recording's mask and label times) instead of
   // one period after the first event.
   std::optional<std::int64_t> tick_origin_us;
@@ -99,6 +101,8 @@ struct RunStats {
   std::uint64_t gap_ticks = 0;  // skipped over gaps of more than 2 s without events
   double crop_area = 0;         // sum over stage-2 runs of the head's share of the frame
   std::uint64_t crop_runs = 0;  // stage-2 runs with cropping on
+  double mask_crop_area = 0;         // sum over stage 1's cropped runs of the crop's share of the frame
+  std::uint64_t mask_crop_runs = 0;  // stage 1's runs on a crop (mask.crop_margin)
   double tore_box_area = 0;     // sum over those ticks of the box's share of the frame
   std::uint64_t tore_box_ticks = 0;  // ticks that read the TORE in stage 2's box alone
   std::vector<double> stage1_run_ms;  // stage 1's time on each tick that ran it

@@ -166,6 +166,8 @@ struct StreamScorer {
     r.stale += st.stale;
     crops.crop_area += st.crop_area;
     crops.crop_runs += st.crop_runs;
+    crops.mask_crop_area += st.mask_crop_area;
+    crops.mask_crop_runs += st.mask_crop_runs;
     tick_ms += total(st.times.tick_ms);
     tore_ms += total(st.times.tore_ms);
     s1_ms += total(st.times.stage1_ms);
@@ -183,6 +185,8 @@ struct StreamScorer {
     r.stage1_ms = s1_ms / timed;
     r.stage2_ms = s2_ms / timed;
     r.crop_share = crop_share(crops);
+    r.mask_crop_runs = crops.mask_crop_runs;
+    r.mask_crop_share = crops.mask_crop_runs ? crops.mask_crop_area / double(crops.mask_crop_runs) : 1.0;
     if (r.mask_ticks) {
       r.mask_iou = overlap.iou();
       for (const auto& [c, o] : overlap_by_condition) r.mask_iou_by_condition[c] = o.iou();

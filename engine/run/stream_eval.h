@@ -75,6 +75,8 @@ struct StreamEvalResult {
   double tore_ms = 0, stage1_ms = 0, stage2_ms = 0;  // mean per tick (stage 1: over every tick)
   double wall_s = 0;               // pipeline time alone
   double crop_share = 1;           // mean share of the frame stage 2's head ran on
+  std::uint64_t mask_crop_runs = 0;  // stage 1's runs on a crop (mask.crop_margin)
+  double mask_crop_share = 1;        // their mean share of the frame
   // The deployed head depth against the true one, over the scored poses (0 when none).
   double depth_ratio_median = 0, depth_abs_error_mm = 0;
   // Recordings and simulated scenes without a dancer (`-empty`): their poses and those that said person.

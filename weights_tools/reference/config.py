@@ -40,6 +40,7 @@ class ModelConfig:
     outside_input: bool = False    # stage 2 reads [inside the mask | outside it]: 2 x channels
     mask_role: str = "mask"        # mask | presence (stage 1 only says whether anyone is there) | none
     crop_margin: int = 0           # inference only (C++ PoseNet::forward_cropped); 0: whole frame
+    mask_crop_margin: int = 0      # inference only (C++ MaskNet::forward_cropped); 0: whole frame
     head_stride: int = 8           # the ResNet head's stride: 8, or 4 (layer2 keeps layer1's resolution)
     hourglass_skip: bool = False   # each hourglass adds its second block's output to its up block's
     depth_map: bool = False        # a fourth hourglass per stage: depth maps read under the xy maps give z
@@ -117,6 +118,7 @@ def config_from_dict(d, where="config"):
         masked_input=_get_bool(p, where + ".pose", "masked_input", True),
         outside_input=_get_bool(p, where + ".pose", "outside_input", False),
         crop_margin=_get(p, where + ".pose", "crop_margin", int, 0),
+        mask_crop_margin=_get(m, where + ".mask", "crop_margin", int, 0),
         head_stride=_get(p, where + ".pose", "head_stride", int, 8),
         hourglass_skip=_get_bool(p, where + ".pose", "hourglass_skip", False),
         depth_map=_get_bool(p, where + ".pose", "depth_map", False),
@@ -152,6 +154,7 @@ def config_from_dict(d, where="config"):
         (cfg.downscale >= 1, "input.downscale must be >= 1"),
         (cfg.window >= 1, "input.window must be >= 1"),
         (cfg.crop_margin >= 0, "pose.crop_margin must be >= 0"),
+        (0 <= cfg.mask_crop_margin <= 4096, "mask.crop_margin must lie in 0..4096 (input pixels; 0: the whole frame)"),
         (cfg.head_stride in (8, 4), "pose.head_stride must be 8 or 4"),
         (cfg.mask_role in ("mask", "presence", "none"), "mask.role must be mask, presence or none"),
         ((cfg.mask_role == "mask") == cfg.masked_input,

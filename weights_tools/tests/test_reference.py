@@ -127,6 +127,13 @@ class ParameterCounts(unittest.TestCase):
         with self.assertRaisesRegex(ConfigError, "mask.role must be mask, presence or none"):
             _cfg(**{"pose.masked_input": False, "mask.role": "crop"})
 
+    def test_mask_crop_margin_is_read_and_checked_as_the_cpp_reader(self):
+        from weights_tools.reference.config import ConfigError
+        self.assertEqual(_cfg().mask_crop_margin, 0)
+        self.assertEqual(_cfg(**{"mask.crop_margin": 8}).mask_crop_margin, 8)
+        with self.assertRaisesRegex(ConfigError, r"mask.crop_margin must lie in 0..4096"):
+            _cfg(**{"mask.crop_margin": -1})
+
     def test_run_settings_are_checked_as_the_cpp_reader_checks_them(self):
         from weights_tools.reference.config import ConfigError
         _cfg(**{"run.mask_cut": 0.5, "run.mask_cut_reused": 0.2, "run.idle_recheck_s": 0.06})
