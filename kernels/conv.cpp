@@ -143,6 +143,11 @@ void for_each_output_tap(const ConvShape& s, Out&& out, Tap&& tap) {
         }
 }
 
+void relu_if_asked(const ConvShape& s, float* y) {
+  if (!s.relu) return;
+  for (std::size_t i = 0, n = y_floats(s); i < n; ++i) y[i] = y[i] > 0.f ? y[i] : 0.f;
+}
+
 void fwd_scalar(const ConvShape& s, const float* x, const float* w, const float* bias, float* y) {
   const Blocked b{s};
   std::memset(y, 0, y_floats(s) * sizeof(float));
@@ -156,11 +161,17 @@ void fwd_scalar(const ConvShape& s, const float* x, const float* w, const float*
         *dst = bias ? bias[o] : 0.f;
       },
       [&](int i, int ih, int iw, int kh, int kw) { *dst += x[b.x(n, i, ih, iw)] * w[b.wf(o, i, kh, kw)]; });
+  relu_if_asked(s, y);
 }
 
-void bwd_data_scalar(const ConvShape& s, const float* dy, const float* w, float* dx) {
+void bwd_data_scalar(const ConvShape& s, const float* dy, const float* w, const float* bias, float* dx) {
   const Blocked b{s};
   std::memset(dx, 0, x_floats(s) * sizeof(float));
+  if (bias)
+    for (int n = 0; n < s.n; ++n)
+      for (int i = 0; i < s.ic; ++i)
+        for (int h = 0; h < s.ih; ++h)
+          for (int w = 0; w < s.iw; ++w) dx[b.x(n, i, h, w)] = bias[i];
   int n = 0, o = 0;
   float g = 0;
   for_each_output_tap(
@@ -232,21 +243,14 @@ void fwd_winograd_scalar(const ConvShape& s, const float* x, const float* u, con
     for (int o = s.oc; o < OCB * kBlock; ++o)
       for (int h = 0; h < OH; ++h)
         for (int w = 0; w < OW; ++w) y[b.y(n, o, h, w)] = 0.f;
+  relu_if_asked(s, y);
 }
 
 }  // namespace
 
 namespace {
 
-// Adds a per-channel bias to (or sums per channel of) a blocked [n][cb][pixels][16] array.
-void add_channel_bias(int n, int cb, std::size_t pixels, const float* bias, float* y) {
-  for (int i = 0; i < n; ++i)
-    for (int b = 0; b < cb; ++b) {
-      float* p = y + (std::size_t(i) * cb + b) * pixels * kBlock;
-      for (std::size_t px = 0; px < pixels; ++px)
-        for (int l = 0; l < kBlock; ++l) p[px * kBlock + l] += bias[b * kBlock + l];
-    }
-}
+// Sums per channel of a blocked [n][cb][pixels][16] array.
 void channel_sums(int n, int cb, std::size_t pixels, const float* x, float* sums) {
   for (int b = 0; b < cb; ++b) {
     double total[kBlock] = {};
@@ -264,8 +268,7 @@ void channel_sums(int n, int cb, std::size_t pixels, const float* x, float* sums
 void deconv_fwd(const ConvKernels& k, const DeconvShape& s, const float* x, const float* w_bwd, const float* bias,
                 float* y) {
   const ConvShape c = s.as_conv();
-  k.bwd_data(c, x, w_bwd, y);
-  if (bias) add_channel_bias(s.n, c.icb(), std::size_t(c.ih) * c.iw, bias, y);
+  k.bwd_data(c, x, w_bwd, bias, y);
 }
 
 void deconv_bwd_data(const ConvKernels& k, const DeconvShape& s, const float* dy, const float* w_fwd, float* dx) {

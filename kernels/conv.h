@@ -35,6 +35,9 @@ struct ConvShape {
   int n = 1, ic = 1, ih = 1, iw = 1;  // input
   int oc = 1, kh = 1, kw = 1;
   int stride = 1, pad_h = 0, pad_w = 0;
+  // fwd and fwd_winograd only: y = max(0, conv + bias), the ReLU of an inference ConvBn fused
+  // into the store instead of a pass of its own over y (the other kernels ignore it).
+  bool relu = false;
   int oh() const { return (ih + 2 * pad_h - kh) / stride + 1; }
   int ow() const { return (iw + 2 * pad_w - kw) / stride + 1; }
   int icb() const { return (ic + kBlock - 1) / kBlock; }
@@ -47,8 +50,10 @@ struct ConvKernels {
   Isa isa;
   // y = conv(x, w) + bias (bias may be null; it has ocb()*16 entries, padding zero)
   void (*fwd)(const ConvShape& s, const float* x, const float* w_fwd, const float* bias, float* y);
-  // dx = conv_transpose(dy, w); overwrites dx
-  void (*bwd_data)(const ConvShape& s, const float* dy, const float* w_bwd, float* dx);
+  // dx = conv_transpose(dy, w) + bias (bias may be null: a backward pass; else a transposed
+  // convolution's forward, its bias added in the store; icb()*16 entries, padding zero);
+  // overwrites dx
+  void (*bwd_data)(const ConvShape& s, const float* dy, const float* w_bwd, const float* bias, float* dx);
   // dw = sum over batch and pixels (fwd packed layout); dbias likewise (may be null).
   // Overwrites both.
   void (*bwd_weights)(const ConvShape& s, const float* x, const float* dy, float* dw, float* dbias);

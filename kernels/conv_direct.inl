@@ -22,6 +22,7 @@ struct TileArgs {
   float* dst;                    // destination pixel of tile column 0, output block 0
   std::ptrdiff_t dst_r, dst_ob;
   const float* bias;             // null, or 16 per output block
+  bool relu = false;             // stores max(0, sum)
 };
 
 // A tile's last output block may hold at most 8 channels (kBlock / 2): the 24-channel
@@ -83,6 +84,15 @@ void tile(const TileArgs& a) {
       } else {
         for (int c = 0; c < lanes; ++c) lane(st, wt, c);
       }
+    }
+  }
+  if (a.relu) {
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 16
+      for (int q = 0; q < NQ; ++q) acc[r][q] = vmax(acc[r][q], vf{});
+#pragma GCC unroll 16
+      for (int q = 0; q < NH; ++q) hacc[r][q] = hacc[r][q] > vhalf{} ? hacc[r][q] : vhalf{};
     }
   }
 #pragma GCC unroll 16
@@ -230,6 +240,7 @@ void conv_fwd(const ConvShape& s, const float* x, const float* w, const float* b
         a.dst_r = kBlock;
         a.dst_ob = y_plane;
         a.bias = bias ? bias + ob0 * kBlock : nullptr;
+        a.relu = s.relu;
         run_row(job, a, nb, ob0 + nb == OCB && s.oc - (OCB - 1) * kBlock <= kBlock / 2);
       }
 }
@@ -237,7 +248,7 @@ void conv_fwd(const ConvShape& s, const float* x, const float* w, const float* b
 // dx[ih][iw] gathers dy[oh][ow] through tap (kh, kw) when ih = oh*s - pad_h + kh, likewise
 // for columns. For a fixed destination row and column phase (iw % s) the valid taps are
 // fixed and ow steps by 1 as iw steps by s: a stride-1 tile over dy writing every s-th dx.
-void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, float* dx) {
+void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, const float* bias, float* dx) {
   const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb(), st = s.stride;
   const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
   const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
@@ -267,7 +278,7 @@ void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, float* d
         a.last_lanes = s.oc - (OCB - 1) * kBlock;
         a.dst_r = std::ptrdiff_t(st) * kBlock;
         a.dst_ob = x_plane;
-        a.bias = nullptr;
+        a.bias = bias ? bias + cb0 * kBlock : nullptr;  // a transposed convolution's
         for (int phase = 0; phase < st && phase < s.iw; ++phase) {
           RowJob job = base;
           job.T = (s.iw - phase + st - 1) / st;

@@ -124,7 +124,8 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
                 vf out[4];
                 wino_at(r[i], out);
                 for (int j = 0; j < 4 && ow0 + j < OW; ++j)
-                  storef(yb + (std::ptrdiff_t(oh0 + i) * OW + ow0 + j) * kBlock + q * VL, out[j] + b);
+                  storef(yb + (std::ptrdiff_t(oh0 + i) * OW + ow0 + j) * kBlock + q * VL,
+                         s.relu ? vmax(out[j] + b, vf{}) : out[j] + b);
               }
             }
           }

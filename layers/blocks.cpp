@@ -21,8 +21,10 @@ Act ConvBn::forward(const Act& x) {
       scale_[o] = bn.weight.value[o] / std::sqrt(bn.running_var.value[o] + bn.eps);
       shift_[o] = bn.bias.value[o] - bn.running_mean.value[o] * scale_[o];
     }
-    conv.forward_folded(x, post_, scale_.data(), shift_.data());
-    if (bn.fused_relu()) activation_forward(Activation::relu, post_, post_);
+    // The ReLU in the convolution's store where the kernel has one (forward convolutions).
+    const bool fuse = bn.fused_relu() && !conv.spec().transposed;
+    conv.forward_folded(x, post_, scale_.data(), shift_.data(), true, fuse);
+    if (bn.fused_relu() && !fuse) activation_forward(Activation::relu, post_, post_);
     return post_;
   }
   pre_ = pre_buf_.like(s);

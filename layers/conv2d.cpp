@@ -98,8 +98,10 @@ static void check(const Act& a, int c, int h, int w, const char* what) {
 }
 
 void Conv2d::run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* b,
-                         bool winograd) {
-  const auto s = conv_shape(x);
+                         bool winograd, bool relu) {
+  if (relu && spec_.transposed) throw std::logic_error("conv: a fused ReLU is for forward convolutions");
+  auto s = conv_shape(x);
+  s.relu = relu;
   conv_flops() += std::uint64_t(s.flops());
   if (conv_trace())
     conv_trace()->push_back({&weight, spec_.k, spec_.stride, spec_.transposed, x.c, x.h, x.w, y.c, y.h, y.w,
@@ -150,10 +152,12 @@ void Conv2d::pack_folded(const kernels::ConvShape& s, const float* scale, const 
   folded_ = true;
 }
 
-void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd) {
+void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd,
+                            bool relu) {
   check_io(x, y);
   pack_folded(conv_shape(x), scale, shift);
-  run_forward(x, y, fold_w_.data(), fold_wino_.size() ? fold_wino_.data() : nullptr, fold_bias16_.data(), winograd);
+  run_forward(x, y, fold_w_.data(), fold_wino_.size() ? fold_wino_.data() : nullptr, fold_bias16_.data(), winograd,
+              relu);
 }
 
 void Conv2d::backward(const Act& x, const Act& dy, const Act* dx) {
@@ -167,7 +171,7 @@ void Conv2d::backward(const Act& x, const Act& dy, const Act* dx) {
     if (dx) kernels::deconv_bwd_data(k, d, dy.data, fwd_.data(), dx->data);
     kernels::deconv_bwd_weights(k, d, x.data, dy.data, dw_packed_.data(), bias ? db16_.data() : nullptr);
   } else {
-    if (dx) k.bwd_data(s, dy.data, bwd_.data(), dx->data);
+    if (dx) k.bwd_data(s, dy.data, bwd_.data(), nullptr, dx->data);
     k.bwd_weights(s, x.data, dy.data, dw_packed_.data(), bias ? db16_.data() : nullptr);
   }
   if (dw_plain_.size() != weight.numel()) dw_plain_ = Floats(weight.numel());

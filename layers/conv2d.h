@@ -56,8 +56,10 @@ class Conv2d {
   void forward(const Act& x, const Act& y, bool winograd = false);
   // Inference through a per-output-channel affine folded into the weights and bias (an
   // eval-mode BatchNorm after this conv): y = scale * conv(x) + shift in one pass. The folded
-  // weights are packed on the first call after weights_changed() or fold_changed().
-  void forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd = true);
+  // weights are packed on the first call after weights_changed() or fold_changed(). relu: y =
+  // max(0, ...) in the same pass (the kernels' store), as a ReLU after the BatchNorm.
+  void forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd = true,
+                      bool relu = false);
   void fold_changed() { folded_ = false; }
   bool fold_packed() const { return folded_; }  // forward_folded will not read scale and shift
   // Adds dL/dweight (and dL/dbias) to the gradients; writes dx when dx is non-null.
@@ -74,7 +76,8 @@ class Conv2d {
   void pack(const kernels::ConvShape& s);
   void check_io(const Act& x, const Act& y) const;
   void pack_folded(const kernels::ConvShape& s, const float* scale, const float* shift);
-  void run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* bias, bool winograd);
+  void run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* bias, bool winograd,
+                   bool relu = false);
 };
 
 }  // namespace yelan::layers

@@ -185,7 +185,7 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
                  {"deconv2d.bwd_weights", [&] { kernels::deconv_bwd_weights(k, d, y.p, x.p, w.p, bias.p); }}};
         } else {
           ops = {{"conv2d.fwd", [&] { k.fwd(s, x.p, w.p, bias.p, y.p); }},
-                 {"conv2d.bwd_data", [&] { k.bwd_data(s, y.p, w.p, x.p); }},
+                 {"conv2d.bwd_data", [&] { k.bwd_data(s, y.p, w.p, nullptr, x.p); }},
                  {"conv2d.bwd_weights", [&] { k.bwd_weights(s, x.p, y.p, w.p, bias.p); }}};
         }
         // Winograd's weights are transformed once, outside the timing, as a layer would.

@@ -117,7 +117,7 @@ void bench_convlstm_step(Isa isa, int threads, int reps, std::vector<Record>& ou
        }},
       {"convlstm.step.bwd", 2 * s.flops(), [&] {
          lstm.bwd(ls, act.p, c0.p, t.p, h.p, c1.p, dg.p, c0.p);
-         conv.bwd_data(s, dg.p, w.p, dxh.p);
+         conv.bwd_data(s, dg.p, w.p, nullptr, dxh.p);
          conv.bwd_weights(s, xh.p, dg.p, w.p, b.p);
        }},
   };

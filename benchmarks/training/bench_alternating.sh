@@ -3,6 +3,7 @@
 # weights files in alternating rounds (ROUNDS, default 9; SERIES=b: the old file's rounds
 # first), the kernel peak measured before and after, the per-round ratios and medians by
 # alternating_rounds.py. Machines are shared and noisy: nothing else may run beside it.
+# Y_OLD=BINARY: the old rounds run that build of yelan (two builds on the same weights).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 old=$1 new=$2 out=$3 note=${4:-}
@@ -15,13 +16,14 @@ order="new old"
   echo "# $(date -u +%F): yelan bench run --weights W --threads-list 1 --no-torch, alternating rounds ($order)"
   echo "# CPU: $(lscpu | grep 'Model name' | sed 's/  */ /g')"
   echo "# peak: $("$Y" bench kernels --quick 2>&1 | grep -i '^peak' | head -1)"
-  echo "# old: $old; new: $new${note:+; $note}; nothing else running"
+  echo "# old: $old${Y_OLD:+ (by $Y_OLD)}; new: $new${Y_OLD:+ (by $Y)}${note:+; $note}; nothing else running"
 } > "$out"
 for r in $(seq 1 "${ROUNDS:-9}"); do
   for w in $order; do
-    W=$old; [ "$w" = new ] && W=$new
+    W=$old Yw=${Y_OLD:-$Y}
+    [ "$w" = new ] && W=$new Yw=$Y
     log=$D/bench-alternating-$$-$w-$r.txt
-    "$Y" bench run --weights "$W" --threads-list 1 --no-torch > "$log" 2>&1
+    "$Yw" bench run --weights "$W" --threads-list 1 --no-torch > "$log" 2>&1
     echo "$w $r $(awk '$2=="1" && $3+0>0 {print $3; exit}' "$log")" | tee -a "$raw"
   done
 done

@@ -58,7 +58,7 @@ Run run_kernels(const ConvKernels& k, const ConvShape& s, const std::vector<floa
   const auto dyb = to_blocked(dy, s.n, s.oc, s.oh(), s.ow());
   std::vector<float> yb(dyb.size(), -7.f), dxb(xb.size(), -7.f), dwp(wf.size(), -7.f), db(bias.size(), -7.f);
   k.fwd(s, xb.data(), wf.data(), bias.data(), yb.data());
-  k.bwd_data(s, dyb.data(), wb.data(), dxb.data());
+  k.bwd_data(s, dyb.data(), wb.data(), nullptr, dxb.data());
   k.bwd_weights(s, xb.data(), dyb.data(), dwp.data(), db.data());
   REQUIRE(padding_is_zero(yb, s.n, s.oc, s.oh(), s.ow()));
   REQUIRE(padding_is_zero(dxb, s.n, s.ic, s.ih, s.iw));
@@ -309,4 +309,46 @@ TEST_CASE("Winograd runs where it pays inside a network: wide or large maps, nev
   REQUIRE(winograd_pays(shape_of({1, 384, 8, 10, 384, 3, 1, 1})));        // 6 tiles, but wide
   REQUIRE_FALSE(winograd_pays(shape_of({1, 64, 33, 44, 64, 3, 2, 1})));   // stride 2: not applicable
   REQUIRE_FALSE(winograd_pays(shape_of({1, 64, 33, 44, 64, 1, 1, 0})));
+}
+
+TEST_CASE("a fused ReLU stores exactly max(0, y) of the same forward, direct and Winograd, on every ISA", "[kernels][conv][winograd]") {
+  for (const Case& c : kCases) {
+    ConvShape s = shape_of(c);
+    const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 61);
+    const auto w = random_floats(std::size_t(s.oc) * s.ic * s.kh * s.kw, 62);
+    const auto b = random_floats(s.oc, 63);
+    std::vector<float> wf(conv_weight_floats(s));
+    pack_conv_weights(s, w.data(), ConvPack::fwd, wf.data());
+    std::vector<float> u;
+    if (winograd_applicable(s)) {
+      u.resize(winograd_weight_floats(s));
+      pack_winograd_weights(s, w.data(), u.data());
+    }
+    std::vector<float> bias(std::size_t(s.ocb()) * kBlock, 0.f);
+    std::copy(b.begin(), b.end(), bias.begin());
+    const auto xb = to_blocked(x, s.n, s.ic, s.ih, s.iw);
+    const std::size_t ny = std::size_t(s.n) * s.ocb() * s.oh() * s.ow() * kBlock;
+    for (Isa isa : yelan::test::supported_isas()) {
+      const ConvKernels& k = conv_kernels(isa);
+      for (const bool wino : {false, true}) {
+        if (wino && u.empty()) continue;
+        if (wino && isa == Isa::scalar && s.ic * s.oc > 20000) continue;  // the textbook loop is slow
+        INFO("isa " << isa_name(isa) << (wino ? " winograd" : " direct") << " n" << c.n << " ic" << c.ic << " " << c.ih
+                    << "x" << c.iw << " oc" << c.oc << " k" << c.k << " s" << c.stride << " p" << c.pad);
+        std::vector<float> plain(ny, -5.f), fused(ny, -5.f);
+        s.relu = false;
+        (wino ? k.fwd_winograd : k.fwd)(s, xb.data(), wino ? u.data() : wf.data(), bias.data(), plain.data());
+        s.relu = true;
+        (wino ? k.fwd_winograd : k.fwd)(s, xb.data(), wino ? u.data() : wf.data(), bias.data(), fused.data());
+        REQUIRE(padding_is_zero(fused, s.n, s.oc, s.oh(), s.ow()));
+        std::size_t negative = 0, differ = 0;
+        for (std::size_t i = 0; i < ny; ++i) {
+          negative += plain[i] < 0.f;
+          differ += fused[i] != (plain[i] > 0.f ? plain[i] : 0.f);
+        }
+        CHECK(differ == 0);
+        CHECK(negative > 0);  // the ReLU had something to clip
+      }
+    }
+  }
 }
