@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
@@ -111,15 +112,29 @@ long long now_ns() {
   return ns(t);
 }
 
-// The process's address space now, in bytes (0 if unknown). A child inherits all of it, so
-// its limit is this plus the budget: a large caller (a training) must not fail every file.
-unsigned long long address_space_bytes() {
+// Field `field` of /proc/self/statm in bytes (0: the address space, 1: resident; 0 if unknown).
+unsigned long long statm_bytes(int field) {
   const int fd = ::open("/proc/self/statm", O_RDONLY | O_CLOEXEC);
   if (fd < 0) return 0;
-  char buf[64] = {};
+  char buf[128] = {};
   const ssize_t n = ::read(fd, buf, sizeof buf - 1);
   ::close(fd);
-  return n > 0 ? std::strtoull(buf, nullptr, 10) * static_cast<unsigned long long>(::sysconf(_SC_PAGESIZE)) : 0;
+  if (n <= 0) return 0;
+  char* p = buf;
+  unsigned long long pages = 0;
+  for (int f = 0; f <= field; ++f) pages = std::strtoull(p, &p, 10);
+  return pages * static_cast<unsigned long long>(::sysconf(_SC_PAGESIZE));
+}
+// The process's address space now. A child inherits all of it, so its limit is this plus the
+// budget: a large caller (a training) must not fail every file.
+unsigned long long address_space_bytes() { return statm_bytes(0); }
+
+// A child that failed with an ordinary error after growing by more than this is not read
+// again in the process: libhdf5 converts a variable-length string by its declared length, so
+// a 10 kB file can ask for 2 GB (a fuzzer found one), and the second read would take it again
+// to say why the file is bad. A bad file's own data can need several times its size.
+unsigned long long refused_growth_bytes(off_t file_bytes) {
+  return std::max<unsigned long long>(512ull << 20, 16ull * static_cast<unsigned long long>(std::max<off_t>(file_bytes, 0)));
 }
 
 }  // namespace
@@ -153,6 +168,7 @@ bool vet_once(const std::string& path, const std::function<void()>& read_all, co
   }
   const bool settled = now_ns() - ns(st.st_ctim) >= kSettledNs;
   const unsigned long long memory_limit = address_space_bytes() + limits.memory_bytes;
+  const unsigned long long resident = statm_bytes(1);
   const pid_t pid = ::fork();
   if (pid < 0) return false;  // cannot isolate: read as before rather than refuse
   if (pid == 0) {
@@ -180,8 +196,15 @@ bool vet_once(const std::string& path, const std::function<void()>& read_all, co
     ::_exit(code);
   }
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0)
+  struct rusage usage {};
+  while (::wait4(pid, &status, 0, &usage) < 0)
     if (errno != EINTR) return true;
+  // The child starts resident as the caller was (its pages shared until written).
+  const unsigned long long peak = static_cast<unsigned long long>(std::max(usage.ru_maxrss, 0L)) * 1024ull;
+  const unsigned long long grew = peak > resident ? peak - resident : 0;
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 3 && resident > 0 && grew > refused_growth_bytes(st.st_size))
+    throw FormatError(path, 0, "corrupt HDF5 file: reading it took " + std::to_string(grew >> 20) + " MiB for a file of " +
+                                   std::to_string(st.st_size) + " bytes before it failed (not read again)");
   if (WIFEXITED(status) && (WEXITSTATUS(status) == 0 || WEXITSTATUS(status) == 3)) {
     if (WEXITSTATUS(status) == 0) {
       std::lock_guard<std::mutex> lock(g_mutex);

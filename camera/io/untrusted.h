@@ -3,12 +3,15 @@
 // without bound before any check of ours runs, and what it does inside cannot be checked
 // from outside. So a file is first read completely in a child process with an address-space
 // limit and a time limit; only when the child finishes (or fails with an ordinary error,
-// which the real read then reports in full) does the process read it itself. A crash, a
-// sanitizer report, the memory limit or the time limit in the child becomes a FormatError
-// naming the file. A file that passed is remembered (device, inode, size, modification and
-// status-change times) so a trainer reopening its recordings pays once; and, across
-// processes, in a cache file (see use_vet_cache()), so a training or an evaluation over a
-// dataset of hundreds of recordings does not read every file twice each time it starts.
+// which the real read then reports in full, unless the child's resident memory grew by more
+// than max(512 MiB, 16x the file's size) first: libhdf5 sizes a variable-length string by
+// its stored length, so a 10 kB file can take 2 GB to refuse, and not twice) does the
+// process read it itself. A crash, a sanitizer report, the memory limit or the time limit
+// in the child becomes a FormatError naming the file. A file that passed is remembered
+// (device, inode, size, modification and status-change times) so a trainer reopening its
+// recordings pays once; and, across processes, in a cache file (see use_vet_cache()), so a
+// training or an evaluation over a dataset of hundreds of recordings does not read every
+// file twice each time it starts.
 #pragma once
 #include <cstddef>
 #include <functional>

@@ -60,6 +60,28 @@ TEST_CASE("vetting in a child: a crash is an error naming the file, an ordinary 
   CHECK_THROWS_AS(camera::vet_in_child(good, [] { ::raise(SIGSEGV); }), camera::FormatError);
 }
 
+TEST_CASE("vetting in a child: an ordinary error after far more memory than the file's is not read again", "[io][h5][untrusted]") {
+  test::ScratchDir d("untrusted-greedy");
+  test::write_text(d.file("greedy.h5"), "ten bytes!");
+  test::write_text(d.file("modest.h5"), "ten bytes!");
+  const auto grow_then_fail = [](std::size_t bytes) {
+    return [bytes] {
+      std::vector<char> big(bytes);
+      std::memset(big.data(), 1, big.size());  // resident, not only reserved
+      throw std::runtime_error("bad file, after " + std::to_string(int(big[bytes / 2])));
+    };
+  };
+  try {
+    camera::vet_in_child(d.file("greedy.h5"), grow_then_fail(std::size_t(700) << 20));
+    FAIL("a child that took 700 MiB for 10 bytes and failed was left to the real read");
+  } catch (const camera::FormatError& e) {
+    CHECK(e.file() == d.file("greedy.h5"));
+    CHECK_THAT(e.problem(), Catch::Contains("not read again") && Catch::Contains("MiB for a file of"));
+  }
+  // A bad file whose read stayed small is left to the real read, which says why in its words.
+  CHECK_NOTHROW(camera::vet_in_child(d.file("modest.h5"), grow_then_fail(std::size_t(32) << 20)));
+}
+
 TEST_CASE("vetting many files up front: jobs at a time, the first failure in order after all ran, the rest remembered",
           "[io][h5][untrusted]") {
   test::ScratchDir d("untrusted-many");

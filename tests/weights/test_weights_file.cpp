@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <sys/resource.h>
+
 #include <cmath>
 #include <fstream>
 #include <iterator>
@@ -114,6 +116,23 @@ TEST_CASE("weights file: one on which libhdf5 spins is refused at the vetting ch
   quick.seconds = 2;
   CHECK_THROWS_WITH(camera::vet_in_child(hang, [&] { weights::load_weights(hang); }, quick),
                     Catch::Contains("more than 2 s of CPU"));
+}
+
+// Found by CI's fuzz run (2026-12-05): the root attribute 'format' of this 10 kB file is a
+// variable-length string whose stored length says 1.9 GB, and libhdf5 allocates that before it
+// finds the heap object missing. The vetting child takes it and fails; the process itself must
+// not read it again to say why (it did: 1.9 GB resident to reject 10 kB).
+TEST_CASE("weights file: a string that asks libhdf5 for 2 GB is refused without a second read", "[weights]") {
+  const std::string greedy = (std::filesystem::path(__FILE__).parent_path().parent_path() / "fuzz" / "greedy" /
+                              "weights-vlen-string-asks-2gb.h5").string();
+  REQUIRE(std::filesystem::exists(greedy));
+  camera::forget_vetted_files();
+  struct rusage before {};
+  ::getrusage(RUSAGE_SELF, &before);
+  CHECK_THAT(error_of(greedy), Catch::Contains("not read again") && Catch::Contains(greedy));
+  struct rusage after {};
+  ::getrusage(RUSAGE_SELF, &after);
+  CHECK(after.ru_maxrss - before.ru_maxrss < 256L << 10);  // KiB: this process never held the 1.9 GB
 }
 
 TEST_CASE("weights file: foreign and damaged files give one exact message each", "[weights]") {
