@@ -144,10 +144,15 @@ void grow_mask(std::vector<float>& keep, int h, int w, int r) {
 }
 
 void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep) {
+  apply_mask(a, n, keep, camera::PixelRect{0, 0, a.w, a.h});
+}
+
+void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep, camera::PixelRect r) {
   for (int cb = 0; cb < a.cb(); ++cb) {
     float* p = a.data + (std::size_t(n) * a.cb() + cb) * a.pixels() * 16;
-    for (std::size_t i = 0; i < a.pixels(); ++i)
-      for (int l = 0; l < 16; ++l) p[i * 16 + l] *= keep[i];
+    for (int y = r.y0; y < r.y1; ++y)
+      for (std::size_t i = std::size_t(y) * a.w + r.x0; i < std::size_t(y) * a.w + r.x1; ++i)
+        for (int l = 0; l < 16; ++l) p[i * 16 + l] *= keep[i];
   }
 }
 

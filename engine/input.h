@@ -50,8 +50,9 @@ void mask_cut_all(const layers::Act& logits, int n, float cut, std::vector<std::
 // kept when any pixel of the (2r + 1)-square around it is (a separable running maximum).
 void grow_mask(std::vector<float>& keep, int h, int w, int r);
 
-// Frame n of `a` multiplied, every channel, by one value per pixel.
+// Frame n of `a` multiplied, every channel, by one value per pixel (inside `r` alone where given).
 void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep);
+void apply_mask(const layers::Act& a, int n, const std::vector<float>& keep, camera::PixelRect r);
 
 // Stage 2's input from frame n of `a`, whose first channels hold the TORE, behind a binarised
 // mask: without `outside`, apply_mask. With it (pose.outside_input: a.c is twice the TORE's

@@ -20,16 +20,10 @@ void zero(const Act& a) { std::memset(a.data, 0, a.floats() * sizeof(float)); }
 // the border is cleared: the window is overwritten.
 void pad_into(const Act& src, const Act& dst, int top, int left) {
   const int right = left + src.w, bottom = top + src.h;
-  for (int p = 0; p < dst.n * dst.cb(); ++p)
-    for (int y = 0; y < dst.h; ++y) {
-      float* row = dst.data + (std::size_t(p) * dst.h + y) * dst.w * 16;
-      if (y < top || y >= bottom) {
-        std::memset(row, 0, std::size_t(dst.w) * 16 * sizeof(float));
-        continue;
-      }
-      std::memset(row, 0, std::size_t(left) * 16 * sizeof(float));
-      std::memset(row + std::size_t(right) * 16, 0, std::size_t(dst.w - right) * 16 * sizeof(float));
-    }
+  layers::zero_window(dst, 0, 0, top, dst.w);
+  layers::zero_window(dst, bottom, 0, dst.h - bottom, dst.w);
+  layers::zero_window(dst, top, 0, src.h, left);
+  layers::zero_window(dst, top, right, src.h, dst.w - right);
   layers::copy_window(src, 0, 0, dst, top, left, src.h, src.w);
 }
 

@@ -183,6 +183,16 @@ void copy_window(const Act& src, int sy, int sx, const Act& dst, int dy, int dx,
                     std::size_t(w) * 16 * sizeof(float));
 }
 
+void zero_window(const Act& a, int y, int x, int h, int w) {
+  if (h < 0 || w < 0 || y < 0 || x < 0 || y + h > a.h || x + w > a.w)
+    throw std::invalid_argument("zero_window: a " + std::to_string(h) + "x" + std::to_string(w) + " window at (" +
+                                std::to_string(y) + "," + std::to_string(x) + ") is not inside " + std::to_string(a.h) +
+                                "x" + std::to_string(a.w));
+  for (int p = 0; p < a.n * a.cb(); ++p)
+    for (int r = 0; r < h; ++r)
+      std::memset(a.data + ((std::size_t(p) * a.h + y + r) * a.w + x) * 16, 0, std::size_t(w) * 16 * sizeof(float));
+}
+
 void concat_channels(const Act& a, const Act& b, const Act& y) {
   if (a.n != b.n || a.h != b.h || a.w != b.w || y.c != a.c + b.c || y.h != a.h || y.w != a.w || y.n != a.n)
     throw std::invalid_argument("concat: inputs " + std::to_string(a.c) + "x" + std::to_string(a.h) + "x" + std::to_string(a.w) +

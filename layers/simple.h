@@ -51,6 +51,8 @@ class Linear {
 // of `dst` (same images and channel blocks, any sizes): padding a map into a larger one,
 // cropping it back out (the adjoint), or pasting a crop's features into the frame's.
 void copy_window(const Act& src, int sy, int sx, const Act& dst, int dy, int dx, int h, int w);
+// The h x w window at (y, x) of every image and channel block of `a` set to zero.
+void zero_window(const Act& a, int y, int x, int h, int w);
 
 // Frame n of `a` mirrored left to right in place, every channel: cell x trades with cell w - 1 - x.
 void flip_frame(const Act& a, int n);

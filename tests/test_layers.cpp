@@ -341,6 +341,28 @@ TEST_CASE("copy_window moves a window between maps of any size, element by eleme
   CHECK_NOTHROW(copy_window(a.act, 1, 2, b.act, 0, 0, 4, 4));
 }
 
+TEST_CASE("zero_window clears a window of every image and block, nothing else, and refuses one that does not fit", "[layers][simple]") {
+  struct Case { int n, c, h, w, y, x, wh, ww; };
+  for (const Case& k : {Case{1, 1, 1, 1, 0, 0, 1, 1}, Case{2, 17, 7, 9, 2, 1, 3, 5}, Case{1, 33, 5, 6, 0, 5, 5, 1},
+                        Case{3, 6, 4, 4, 1, 1, 0, 2}}) {
+    INFO(k.c << " channels, a " << k.wh << "x" << k.ww << " window at (" << k.y << "," << k.x << ") of " << k.h << "x" << k.w);
+    Owned a(k.n, k.c, k.h, k.w, 33), before(a.act);
+    std::memcpy(before.mem.data(), a.mem.data(), a.mem.size() * sizeof(float));
+    zero_window(a.act, k.y, k.x, k.wh, k.ww);
+    for (std::size_t i = 0; i < a.mem.size(); ++i) {
+      const std::size_t px = i / 16 % a.act.pixels();
+      const int y = int(px) / k.w, x = int(px) % k.w;
+      const bool inside = y >= k.y && y < k.y + k.wh && x >= k.x && x < k.x + k.ww;
+      REQUIRE(a.mem[i] == (inside ? 0.f : before.mem[i]));
+    }
+  }
+  Owned a(1, 17, 5, 6);
+  CHECK_THROWS_AS(zero_window(a.act, 0, 0, 6, 1), std::invalid_argument);   // too tall
+  CHECK_THROWS_AS(zero_window(a.act, 2, 3, 3, 4), std::invalid_argument);   // off the right edge
+  CHECK_THROWS_AS(zero_window(a.act, -1, 0, 1, 1), std::invalid_argument);
+  CHECK_NOTHROW(zero_window(a.act, 0, 0, 5, 6));
+}
+
 TEST_CASE("elementwise mul, same shape and a one-channel gate: gradients by finite differences", "[layers][simple]") {
   for (auto [c, gc] : {std::pair{13, 13}, std::pair{6, 1}, std::pair{17, 1}, std::pair{1, 1}}) {
     INFO(c << " channels times " << gc);

@@ -12,6 +12,7 @@
 #include "camera/sim/motion.h"
 #include "engine/input.h"
 #include "engine/train/pose_norm.h"
+#include "layers/simple.h"
 #include "weights_tools/network_io.h"
 
 namespace yelan::run {
@@ -359,29 +360,20 @@ struct PosePipeline::Impl {
   }
 
   // Stage 2's masked input into frame, the TORE times mask `use`, as a copy and
-  // input::apply_mask would leave it (a tick's input the same value for value), but over the
-  // mask's box alone: outside it the mask is zero, and so is frame once the last tick's box is
-  // cleared. A third of the frame's bytes on a dancer, none in an empty room.
+  // input::apply_mask over the frame would leave it (a tick's input the same value for value),
+  // but over the mask's box alone: outside it the mask is zero, and so is frame once the last
+  // tick's box is cleared. A third of the frame's bytes on a dancer, none in an empty room.
   void box_input(int use) {
     const layers::Act& a = frame.act;
-    const std::vector<float>& keep = stage2_mask(use);
     const PoseNet::CropBox& m = stage2_box(use);
     const auto clipped = [&](const PoseNet::CropBox& b) {
-      return PoseNet::CropBox{std::max(b.x0, 0), std::max(b.y0, 0), std::min(b.x1, a.w), std::min(b.y1, a.h)};
+      const PoseNet::CropBox c{std::max(b.x0, 0), std::max(b.y0, 0), std::min(b.x1, a.w), std::min(b.y1, a.h)};
+      return c.empty() ? PoseNet::CropBox{} : c;
     };
-    const PoseNet::CropBox old = clipped(frame_written), now = m.empty() ? PoseNet::CropBox{} : clipped(m);
-    for (int cb = 0; cb < a.cb(); ++cb) {
-      float* dst = a.data + std::size_t(cb) * a.pixels() * 16;
-      const float* src = unmasked.act.data + std::size_t(cb) * a.pixels() * 16;
-      for (int y = old.y0; y < old.y1 && old.x1 > old.x0; ++y)
-        std::fill_n(dst + (std::size_t(y) * a.w + old.x0) * 16, std::size_t(old.x1 - old.x0) * 16, 0.f);
-      for (int y = now.y0; y < now.y1; ++y)
-        for (int x = now.x0; x < now.x1; ++x) {
-          const std::size_t i = std::size_t(y) * a.w + x;
-          const float k = keep[i];
-          for (int l = 0; l < 16; ++l) dst[i * 16 + l] = src[i * 16 + l] * k;
-        }
-    }
+    const PoseNet::CropBox old = clipped(frame_written), now = clipped(m);
+    layers::zero_window(a, old.y0, old.x0, old.y1 - old.y0, old.x1 - old.x0);
+    layers::copy_window(unmasked.act, now.y0, now.x0, a, now.y0, now.x0, now.y1 - now.y0, now.x1 - now.x0);
+    input::apply_mask(a, 0, stage2_mask(use), camera::PixelRect{now.x0, now.y0, now.x1, now.y1});
     frame_written = now;
   }
 
