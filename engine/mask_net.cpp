@@ -96,6 +96,7 @@ void MaskNet::check_input(const Act& x) const {
 
 void MaskNet::forward_once(const Act& x) {
   check_input(x);
+  const layers::Bf16Convs precision(bf16_);
   cropped_ = false;
   // mask.pool: the U-Net on the input average-pooled pool x pool, its logits resized back bilinearly
   // (pool^2 times fewer pixels; the score head reads the pooled map's top as before).

@@ -75,6 +75,9 @@ class MaskNet : public layers::Module<MaskNet> {
     have_zero_ = false;
     Module::weights_changed();
   }
+  // Inference in bf16 on AMX where the CPU has it (layers::bf16_convs; run.bf16 by default).
+  void set_bf16(bool on) { bf16_ = on; }
+  bool bf16() const { return bf16_; }
   const layers::Act& masks() const { return masks_; }        // n x N logits x H x W
   const std::vector<float>& scores() const { return scores_; }  // n x N, after the sigmoid
   // dmasks: dL/dlogits (data may be null); dscores: dL/dscores (may be null).
@@ -89,6 +92,7 @@ class MaskNet : public layers::Module<MaskNet> {
   void score_head(int n);
   static constexpr int kLevels = 4;  // the U-Net's depth: 4 downs, 4 ups (the architecture's, not a config's)
   ModelConfig cfg_;
+  bool bf16_ = cfg_.run_bf16;
   int w_[kLevels + 1];
   DoubleConv inc_;
   std::vector<std::unique_ptr<DoubleConv>> down_, up_conv_;

@@ -69,6 +69,7 @@ void MaskNet::prepare_zero_frame(int channels) {
 Box MaskNet::forward_cropped(const Act& x, Box box) {
   check_input(x);
   if (layers::grad_enabled() || x.n != 1) throw std::logic_error("mask net: forward_cropped is for inference on one frame (NoGrad)");
+  const layers::Bf16Convs precision(bf16_);
   const int H = x.h, W = x.w, a = 1 << kLevels;
   box = clip({box.x0 / a * a, box.y0 / a * a, (box.x1 + a - 1) / a * a, (box.y1 + a - 1) / a * a}, H, W);
   if (box.empty() || cfg_.mask_pool > 1 || (box.x0 == 0 && box.y0 == 0 && box.x1 == W && box.y1 == H)) {

@@ -43,6 +43,11 @@ CpuFeatures detect() {
     f.avx512bw = (b & bit_AVX512BW) && os_zmm;
     f.avx512vl = (b & bit_AVX512VL) && os_zmm;
     f.avx512dq = (b & bit_AVX512DQ) && os_zmm;
+    const bool os_tiles = (xcr0 & 0x60000) == 0x60000;  // XTILECFG and XTILEDATA
+    f.amx_tile = (d & (1u << 24)) && os_tiles;
+    f.amx_bf16 = (d & (1u << 22)) && os_tiles;
+    unsigned a1, b1, c1, d1;
+    if (a >= 1 && __get_cpuid_count(7, 1, &a1, &b1, &c1, &d1)) f.avx512bf16 = (a1 & (1u << 5)) && os_zmm;
   }
   return f;
 }
@@ -87,7 +92,7 @@ std::string CpuFeatures::describe() const {
   };
   add(sse42, "sse4.2"); add(avx, "avx"); add(avx2, "avx2"); add(fma, "fma"); add(f16c, "f16c");
   add(avx512f, "avx512f"); add(avx512bw, "avx512bw"); add(avx512vl, "avx512vl");
-  add(avx512dq, "avx512dq"); add(neon, "neon"); add(fp16, "fp16"); add(dotprod, "dotprod");
+  add(avx512dq, "avx512dq"); add(avx512bf16, "avx512bf16"); add(amx_tile, "amx-tile"); add(amx_bf16, "amx-bf16"); add(neon, "neon"); add(fp16, "fp16"); add(dotprod, "dotprod");
   return s.empty() ? "none" : s;
 }
 

@@ -12,6 +12,7 @@ struct CpuFeatures {
   // x86: each flag means the CPU has it AND the OS saves the registers it needs.
   bool sse42 = false, avx = false, avx2 = false, fma = false, f16c = false;
   bool avx512f = false, avx512bw = false, avx512vl = false, avx512dq = false;
+  bool avx512bf16 = false, amx_tile = false, amx_bf16 = false;  // amx: CPU and OS tile state
   // aarch64
   bool neon = false, fp16 = false, dotprod = false;
   std::string describe() const;  // e.g. "avx2 fma f16c avx512f avx512bw ..."

@@ -26,6 +26,24 @@ std::uint64_t& conv_flops();
 // convolution everywhere, a few ulps closer to a reference. Process-wide.
 bool& winograd_allowed();
 
+// Inference convolutions (forward_folded: an eval-mode ConvBn's) of stride 1 and kernel > 1x1
+// in bf16 on the CPU's AMX tiles (kernels/conv_bf16.h) where it has them; elsewhere, or off
+// (the default), fp32 as before. Process-wide; a network sets it for its own forward with
+// Bf16Convs (stage 1 under run.bf16).
+bool& bf16_convs();
+class Bf16Convs {
+ public:
+  explicit Bf16Convs(bool on) : saved_(bf16_convs()) { bf16_convs() = on; }
+  ~Bf16Convs() { bf16_convs() = saved_; }
+  Bf16Convs(const Bf16Convs&) = delete;
+  Bf16Convs& operator=(const Bf16Convs&) = delete;
+
+ private:
+  bool saved_;
+};
+// Whether a forward_folded of this shape takes the bf16 path now (bf16_convs, the CPU, the shape).
+bool takes_bf16(const kernels::ConvShape& s);
+
 // One Conv2d forward as `yelan model summary` lists it: which layer (its weight, whose key
 // the caller's ParamList knows), the shapes in and out, and the multiply-add FLOPs.
 struct ConvRecord {
@@ -53,6 +71,7 @@ class Conv2d {
   // Output geometry for an input (data left null).
   Act out_shape(const Act& x) const;
   // y must have out_shape(x)'s size. Winograd only where applicable (3x3/1) and asked for.
+  // A 2x2/2 transposed conv under NoGrad and bf16_convs runs in bf16 on AMX where the CPU has it.
   void forward(const Act& x, const Act& y, bool winograd = false);
   // Inference through a per-output-channel affine folded into the weights and bias (an
   // eval-mode BatchNorm after this conv): y = scale * conv(x) + shift in one pass. The folded
@@ -71,10 +90,13 @@ class Conv2d {
   bool folded_ = false;
   Floats fwd_, bwd_, wino_, bias16_, dw_packed_, db16_, dw_plain_;
   Floats fold_w_, fold_wino_, fold_bias16_;
+  std::vector<std::uint16_t> fold_bf16_;  // the folded weights for the bf16 kernel, where it can run
+  std::vector<std::uint16_t> up_bf16_;    // a 2x2/2 transposed conv's, packed on its first bf16 forward
   kernels::ConvShape conv_shape(const Act& x) const;   // the kernel's conv (for a deconv: its adjoint)
   kernels::DeconvShape deconv_shape(const Act& x) const;
   void pack(const kernels::ConvShape& s);
   void check_io(const Act& x, const Act& y) const;
+  void record(const Act& x, const Act& y, const kernels::ConvShape& s) const;  // conv_flops, conv_trace
   void pack_folded(const kernels::ConvShape& s, const float* scale, const float* shift);
   void run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* bias, bool winograd,
                    bool relu = false);

@@ -4,8 +4,12 @@
 #include "layer_fd.h"
 #include "layers/blocks.h"
 #include "layers/hourglass.h"
+#include "kernels/conv_bf16.h"
+#include "test_util.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 using namespace yelan::layers;
@@ -317,4 +321,85 @@ TEST_CASE("BN folded into the conv under NoGrad matches the eval-mode forward", 
     Owned x(3, 5, 33, 44, 15);
     check_folded(b, x, 4);
   }
+}
+
+// Where the CPU has AMX-BF16 an eval-mode ConvBn under Bf16Convs runs the bf16 kernel on its
+// folded weights: within bf16's rounding of the fp32 fold, ReLU fused, and fp32 again,
+// bit for bit, once the scope ends; 1x1 and stride-2 convolutions stay fp32.
+TEST_CASE("ConvBn folded under Bf16Convs: bf16 on AMX for k > 1 stride 1, fp32 elsewhere and after", "[layers][blocks]") {
+  yelan::test::amx_or_skip();
+  struct Case {
+    ConvSpec spec;
+    bool bf16;
+  };
+  for (const Case& c : {Case{{20, 40, 3, 1, 1}, true}, Case{{6, 24, 3, 1, 1}, true}, Case{{24, 16, 1, 1, 0}, false},
+                        Case{{20, 24, 3, 2, 1}, false}}) {
+    INFO("in " << c.spec.in << " out " << c.spec.out << " k " << c.spec.k << " stride " << c.spec.stride);
+    ConvBn b(c.spec, true);
+    b.init(21);
+    ParamList params;
+    b.params("conv.", "bn.", params);
+    randomise_bn_stats(params, 5);
+    b.weights_changed();
+    b.set_training(false);
+    Owned x(1, c.spec.in, 19, 23, 8);
+    NoGrad no_grad;
+    const Act y = b.forward(x.act);
+    const std::vector<float> fp32(y.data, y.data + y.floats());
+    std::vector<float> bf;
+    {
+      const Bf16Convs on(true);
+      const Act yb = b.forward(x.act);
+      bf.assign(yb.data, yb.data + yb.floats());
+    }
+    CHECK_FALSE(bf16_convs());
+    const Act again = b.forward(x.act);
+    CHECK(std::memcmp(again.data, fp32.data(), fp32.size() * sizeof(float)) == 0);
+    double worst = 0, scale = 1e-6;
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < fp32.size(); ++i) {
+      REQUIRE(bf[i] >= 0.f);
+      worst = std::max(worst, double(std::fabs(bf[i] - fp32[i])));
+      scale = std::max(scale, double(std::fabs(fp32[i])));
+      differ += bf[i] != fp32[i];
+    }
+    if (c.bf16) {
+      CHECK(differ > fp32.size() / 8);
+      CHECK(worst / scale < 2e-2);
+    } else {
+      CHECK(differ == 0);
+    }
+  }
+}
+
+TEST_CASE("a 2x2/2 transposed Conv2d under NoGrad and Bf16Convs runs in bf16 on AMX, fp32 in training and after", "[layers][blocks]") {
+  yelan::test::amx_or_skip();
+  Conv2d up({40, 20, 2, 2, 0, true, true});
+  up.init(3);
+  Owned x(1, 40, 7, 9, 4);
+  const Act shape = up.out_shape(x.act);
+  Owned y(shape), yb(shape), y2(shape), yt(shape);
+  {
+    NoGrad no_grad;
+    up.forward(x.act, y.act);
+    const Bf16Convs on(true);
+    up.forward(x.act, yb.act);
+  }
+  {
+    const Bf16Convs on(true);
+    up.forward(x.act, yt.act);  // gradients on: the training path, fp32
+  }
+  NoGrad no_grad;
+  up.forward(x.act, y2.act);
+  CHECK(std::memcmp(y2.mem.data(), y.mem.data(), y.mem.size() * sizeof(float)) == 0);
+  CHECK(std::memcmp(yt.mem.data(), y.mem.data(), y.mem.size() * sizeof(float)) == 0);
+  double worst = 0, scale = 1e-6;
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < y.mem.size(); ++i) {
+    worst = std::max(worst, double(std::fabs(yb.mem[i] - y.mem[i])));
+    scale = std::max(scale, double(std::fabs(y.mem[i])));
+    differ += yb.mem[i] != y.mem[i];
+  }
+  CHECK(differ > y.mem.size() / 4);
+  CHECK(worst / scale < 2e-2);
 }

@@ -11,9 +11,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "kernels/conv_bf16.h"
 #include "engine/mask_net.h"
 #include "engine/model_config.h"
 #include "engine/pose_net.h"
+#include "layers/conv2d.h"
 #include "layers/simple.h"
 #include "layer_fd.h"
 
@@ -297,6 +299,47 @@ TEST_CASE("mask net with run.mask_mirror: under NoGrad the mean of the net on x 
   const std::vector<float> m_flipped = flipped(m.masks, shape);
   for (std::size_t i = 0; i < m.masks.size(); ++i) REQUIRE(mf.masks[i] == Approx(m_flipped[i]).margin(1e-5));
   for (std::size_t i = 0; i < m.scores.size(); ++i) REQUIRE(mf.scores[i] == Approx(m.scores[i]).margin(1e-6));
+}
+
+TEST_CASE("mask net with run.bf16: bf16 masks within 3% of fp32 where the CPU has AMX, the same bits elsewhere and in training",
+          "[networks][mask]") {
+  const std::string text =
+      R"({"name":"bf16-mask","input":{"channels":6,"sensor_height":48,"sensor_width":80,"downscale":1,"window":1},)"
+      R"("mask":{"width_mult":0.25,"n_masks":3},"pose":{"width_mult":0.125,"hidden":4,"stages":1,"joints":13,"convlstm":"causal"},)"
+      R"("run":{"bf16":true}})";
+  const ModelConfig cfg = parse_model_config(text, "bf16-mask");
+  REQUIRE(cfg.run_bf16);
+  MaskNet bf(cfg), plain(cfg);
+  CHECK(bf.bf16());
+  plain.set_bf16(false);
+  bf.init(4);
+  plain.init(4);
+  yelan::test::Owned x(1, 6, 48, 80, 9);
+  bf.forward(x.act);  // training: no fold, fp32 whatever the setting
+  plain.forward(x.act);
+  REQUIRE(MaskOut(bf).masks == MaskOut(plain).masks);
+  bf.set_training(false);
+  plain.set_training(false);
+  layers::NoGrad no_grad;
+  bf.forward(x.act);
+  plain.forward(x.act);
+  const MaskOut b(bf), p(plain);
+  CHECK_FALSE(layers::bf16_convs());  // the net's scope ended with its forward
+  if (!yelan::kernels::amx_bf16_available()) {
+    REQUIRE(b.masks == p.masks);
+    return;
+  }
+  const auto [lo, hi] = std::minmax_element(p.masks.begin(), p.masks.end());
+  double worst = 0;
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < p.masks.size(); ++i) {
+    worst = std::max(worst, double(std::abs(b.masks[i] - p.masks[i])));
+    differ += b.masks[i] != p.masks[i];
+  }
+  INFO("logits spread " << (*hi - *lo) << ", worst " << worst);
+  CHECK(differ > p.masks.size() / 8);  // 3 of the 16 lanes are masks, the rest padding
+  CHECK(worst < 0.03 * double(*hi - *lo));
+  for (std::size_t i = 0; i < p.scores.size(); ++i) CHECK(b.scores[i] == Approx(p.scores[i]).margin(1e-2));
 }
 
 TEST_CASE("mask net forward_cropped: the frame's masks where the frame is empty outside the box, the empty room's far from it",

@@ -19,6 +19,8 @@
 #include "engine/model_config.h"
 #include "engine/run/pipeline.h"
 #include "engine/run/stream_eval.h"
+#include "kernels/conv_bf16.h"
+#include "weights_tools/weights_file.h"
 
 namespace {
 using yelan::test::contains;
@@ -474,6 +476,7 @@ TEST_CASE("run: run.mask_mirror's margin redoes stage 1 mirrored exactly where i
   yelan::run::RunOptions o;
   o.beta = 1.01;
   o.mask_mirror_doubt = 1e-9;
+  o.bf16 = yelan::parse_model_config(yelan::weights::WeightsReader(w).config_json(), w).run_bf16;  // the default's precision
   yelan::run::PosePipeline pipe(always, 346, 260, o);
   std::vector<float> always_shares;
   yelan::run::run_file(pipe, d / "r.yelan.h5", 500000, [&](const yelan::run::Pose& p) { always_shares.push_back(p.mask_share); });
@@ -1284,6 +1287,54 @@ TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that o
   CHECK(yelan::parse_model_config(cfg, "s41").mask_max_age == 0);
   CHECK_THROWS_AS(yelan::with_run_setting(cfg, "mask_max_age", "-1"), yelan::ConfigError);
   CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--mask-max-age", "3"}).code == 2);
+}
+
+TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX, and there run.mask_max_age_bf16 caps early exit", "[run][cli]") {
+  yelan::test::CliTempDir d("bf16");
+  const std::vector<std::string> recs = dancer_and_empty(d);
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const bool amx = yelan::kernels::amx_bf16_available();
+  std::ostringstream progress;
+  const auto run = [&](std::optional<bool> bf16, std::optional<int> max_age) {
+    yelan::run::RunOptions o;
+    o.bf16 = bf16;
+    o.mask_max_age = max_age;
+    return yelan::run::evaluate_recordings(w, recs, 0.6, 0.1, o, progress, true);
+  };
+  // The shipped default: bf16 and a cap of 3 where the CPU has AMX, else fp32 and its cap of 6.
+  const auto model = run(std::nullopt, std::nullopt);
+  CHECK(model.stage1_bf16 == amx);
+  CHECK(model.mask_max_age == (amx ? 3 : 6));
+  const auto fp32 = run(false, std::nullopt);
+  CHECK_FALSE(fp32.stage1_bf16);
+  CHECK(fp32.mask_max_age == 6);
+  // An explicit cap holds on either path; at the same cap bf16's masks differ from fp32's by
+  // rounding alone (without AMX they are the same run).
+  const auto a = run(false, 3), b = run(true, 3);
+  CHECK(a.mask_max_age == 3);
+  CHECK(b.mask_max_age == 3);
+  REQUIRE(a.poses.size() == b.poses.size());
+  REQUIRE(a.mask_ticks > 0);
+  if (amx) {
+    CHECK(b.stage1_bf16);
+    CHECK(b.mask_iou == Approx(a.mask_iou).margin(0.02));
+  } else {
+    CHECK(b.mask_iou == a.mask_iou);
+    CHECK(b.mask_runs == a.mask_runs);
+  }
+  // The config keys, checked as every run key is.
+  const std::string cfg = slurp(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s49.json");
+  const yelan::ModelConfig c = yelan::parse_model_config(cfg, "s49");
+  CHECK(c.run_bf16);
+  CHECK(c.mask_max_age_bf16 == 3);
+  CHECK(c.mask_max_age == 6);
+  CHECK_FALSE(yelan::parse_model_config(yelan::with_run_setting(cfg, "bf16", "false"), "x").run_bf16);
+  CHECK_THROWS_AS(yelan::with_run_setting(cfg, "mask_max_age_bf16", "-1"), yelan::ConfigError);
+  CHECK_THROWS_AS(yelan::with_run_setting(cfg, "bf16", "\"maybe\""), yelan::ConfigError);
+  const auto bad = run_cli({"eval", "--run", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--bf16", "maybe"});
+  CHECK(bad.code == 2);
+  CHECK_THAT(bad.err, Catch::Contains("--bf16 expects on or off, got 'maybe'"));
+  CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--bf16", "on"}).code == 2);
 }
 
 TEST_CASE("run: mask.crop_margin runs stage 1 on its last masks' box while a dancer is there, the whole frame while nobody is", "[run][cli]") {

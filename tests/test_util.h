@@ -40,6 +40,8 @@ struct IsaGuard {
 #include <filesystem>
 #include <string>
 
+#include "kernels/conv_bf16.h"
+
 namespace yelan::test {
 
 // The shared data folder (../shared/data beside the project, or $YELAN_SHARED_DATA) joined
@@ -58,6 +60,15 @@ inline std::string shared_data_or_skip(const std::string& relative) {
     std::exit(77);
   }
   return path;
+}
+
+// Where the CPU or OS gives no AMX-BF16 (kernels/conv_bf16.h) the test is reported SKIPPED
+// (exit 77, as above), naming what the CPU has.
+inline void amx_or_skip() {
+  if (yelan::kernels::amx_bf16_available()) return;
+  std::printf("SKIP: no AMX-BF16 here (cpu: %s)\n", yelan::kernels::cpu_features().describe().c_str());
+  std::fflush(stdout);
+  std::exit(77);
 }
 
 }  // namespace yelan::test

@@ -25,6 +25,7 @@
 #include "engine/cli/output_path.h"
 #include "engine/threads.h"
 #include "kernels/conv.h"
+#include "kernels/conv_bf16.h"
 #include "kernels/peak.h"
 
 namespace yelan::bench {
@@ -192,6 +193,16 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
         Buffer wino(kernels::winograd_applicable(s) && !c.transposed ? kernels::winograd_weight_floats(s) : 1, 5);
         if (kernels::winograd_applicable(s) && !c.transposed)
           ops.push_back({"conv2d.fwd", [&] { k.fwd_winograd(s, x.p, wino.p, bias.p, y.p); }, "winograd"});
+        // bf16 on AMX tiles (inference; stride 1 and the 2x2/2 up-sampling), on the best ISA's pass.
+        const bool amx = kernels::amx_bf16_available() && isa == kernels::best_isa();
+        std::vector<std::uint16_t> w16;
+        if (amx && !c.transposed && kernels::conv_bf16_applicable(s)) {
+          w16.resize(kernels::conv_bf16_weight_halves(s));
+          ops.push_back({"conv2d.fwd", [&] { kernels::conv_fwd_bf16_amx(s, x.p, w16.data(), bias.p, y.p); }, "amx-bf16"});
+        } else if (amx && c.transposed && kernels::deconv2x2_bf16_applicable(d)) {
+          w16.resize(kernels::deconv2x2_bf16_weight_halves(d));
+          ops.push_back({"deconv2d.fwd", [&] { kernels::deconv2x2_fwd_bf16_amx(d, y.p, w16.data(), bias.p, x.p); }, "amx-bf16"});
+        }
         for (const auto& op : ops) {
           const double sec = median_seconds_per_call(op.fn, reps, quick ? 0.02 : 0.05);
           Record r{c.where, op.op, op.algo, c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,

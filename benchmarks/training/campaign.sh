@@ -899,6 +899,11 @@ case "$what" in
   ship-s44)
     "$Y" weights combine --mask models/campaign/mask-s43/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
       --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s44.json -o models/default.h5 ;;
+  # The default since the forty-ninth session: -s44's networks and calibration, stage 1 in bf16
+  # on AMX where the CPU has it and there capped at 3 frames (chosen on validation, s49/).
+  ship-s49)
+    "$Y" weights combine --mask models/campaign/mask-s43/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
+      --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s49.json -o models/default.h5 ;;
   combine)
     "$Y" weights combine --mask "$RUNS/${MASK_RUN:-mask-s2}/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;

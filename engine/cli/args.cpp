@@ -66,6 +66,13 @@ int Args::int_value_or(const std::string& name, int fallback, int min, int max) 
   return n;
 }
 
+bool Args::on_off(const std::string& name) const {
+  const std::string v = value_or(name, "");
+  if (v == "on" || v == "1" || v == "true" || v == "yes") return true;
+  if (v == "off" || v == "0" || v == "false" || v == "no") return false;
+  throw UsageError("option " + name + " expects on or off, got '" + v + "'");
+}
+
 namespace {
 std::string shown(double v) {
   std::ostringstream o;

@@ -29,6 +29,9 @@ class Args {
   // option is absent; anything else (text, NaN, infinities, out of range) is a UsageError
   // naming the option and the range. Every number an option takes is parsed here, once.
   double number_or(const std::string& name, double fallback, double min, double max, bool min_open = false) const;
+  // "on" or "off" (also 1/0, true/false, yes/no); anything else is a UsageError naming the
+  // option. The option must be present.
+  bool on_off(const std::string& name) const;
   std::uint64_t u64_value_or(const std::string& name, std::uint64_t fallback, std::uint64_t max) const;
   const std::vector<std::string>& positionals() const { return positionals_; }
   // Throws UsageError unless the count of positionals is within [min, max].

@@ -12,6 +12,7 @@
 #include "camera/sim/motion.h"
 #include "engine/input.h"
 #include "engine/train/pose_norm.h"
+#include "kernels/conv_bf16.h"
 #include "layers/simple.h"
 #include "weights_tools/network_io.h"
 
@@ -140,6 +141,7 @@ struct PosePipeline::Impl {
   DepthSmoother depth_smoother;
   JointSmoother joint_smoother;
   double beta = 0.99;
+  bool stage1_bf16 = false;  // stage 1 in bf16 on AMX (run.bf16 or RunOptions::bf16, and the CPU)
   Pose last;
   bool have_last = false;
   RunStats stats;
@@ -179,6 +181,9 @@ struct PosePipeline::Impl {
     joint_smoother = JointSmoother(nets.cfg.pose_tau_s);
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
+    if (o.bf16) nets.mask.set_bf16(*o.bf16);
+    stage1_bf16 = nets.mask.bf16() && kernels::amx_bf16_available();
+    if (stage1_bf16 && cfg.mask_max_age_bf16) nets.cfg.mask_max_age = *cfg.mask_max_age_bf16;
     if (o.mask_max_age) {
       if (*o.mask_max_age < 0) throw std::invalid_argument("mask_max_age must be >= 0 (frames; 0: none)");
       nets.cfg.mask_max_age = *o.mask_max_age;
@@ -603,6 +608,8 @@ const RunStats& PosePipeline::stats() const { return impl_->stats; }
 std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
 std::array<double, 2> PosePipeline::presence_ab() const { return {impl_->nets.cfg.presence_a, impl_->nets.cfg.presence_b}; }
 double PosePipeline::beta() const { return impl_->beta; }
+bool PosePipeline::stage1_bf16() const { return impl_->stage1_bf16; }
+int PosePipeline::mask_max_age() const { return impl_->nets.cfg.mask_max_age; }
 
 double presence_feature(double share) { return std::log(std::max(0.0, share) + 0.001); }
 double presence_probability_of_feature(double x, double a, double b) { return 1 / (1 + std::exp(-(a * x + b))); }

@@ -51,6 +51,8 @@ struct RunOptions {
   std::optional<double> pose_tau_s;
   // Whether the depth prior counts the forearms, instead of the model's run.depth_forearms.
   std::optional<bool> depth_forearms;
+  // Stage 1 in bf16 on AMX where the CPU has it, or fp32, instead of the model's run.bf16.
+  std::optional<bool> bf16;
   // run.mask_max_age instead of the model's (0: none).
   std::optional<int> mask_max_age;
   // Seconds between stage 1's runs while it sees nobody, instead of the model's run.idle_recheck_s.
@@ -128,6 +130,8 @@ class PosePipeline {
   std::string config_name() const;
   std::array<double, 2> presence_ab() const;  // the calibration P(person) is read with: {a, b}
   double beta() const;  // the early-exit threshold in use
+  bool stage1_bf16() const;  // stage 1 in bf16 on AMX (run.bf16 or --bf16, and the CPU has it)
+  int mask_max_age() const;  // the age cap in use (0: none): run.mask_max_age_bf16 where stage 1 runs bf16
   bool causal() const;
   // The time of the latest tick. A windowed (bidirectional) stage 2 hands out a window's poses
   // after its last tick: inside the callback the masks above are that tick's, so a pose of an

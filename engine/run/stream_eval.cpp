@@ -217,6 +217,8 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
     const double end_s = simulator.duration_s();
     const int W = simulator.camera().width;
     PosePipeline pipe(weights, W, simulator.camera().height, opt);
+    sc.r.stage1_bf16 = pipe.stage1_bf16();
+    sc.r.mask_max_age = pipe.mask_max_age();
     const int d = pipe.mask_downscale(), mw = W / d, mh = simulator.camera().height / d;
     const std::vector<std::string> conditions = conditions_in(sc.source);
     const std::int64_t scored_from = std::llround(scene.warmup_s * 1e6), scored_to = std::llround(end_s * 1e6);
@@ -263,6 +265,8 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     const sim::RecordingInfo info = sim::read_recording_info(recordings[i]);
     sc.source = info.name;
     PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);
+    sc.r.stage1_bf16 = pipe.stage1_bf16();
+    sc.r.mask_max_age = pipe.mask_max_age();
     const std::int64_t end_us = info.first_event_us + std::llround(seconds * 1e6);
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);
     std::optional<TrueMasks> truth;

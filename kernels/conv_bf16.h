@@ -1,0 +1,56 @@
+// Inference convolution in bf16 on AMX tiles (Intel Sapphire Rapids and later): stride 1,
+// any kernel and padding, NCHW16c fp32 in and out like the other conv kernels. Inputs and
+// weights are rounded to bf16 (round to nearest even, subnormals to zero); their products
+// are exact in fp32 and summed in fp32, so the result is the convolution of the rounded
+// operands up to fp32 summation (bound in tests/kernels/test_conv_bf16.cpp).
+//
+// Why direct and not Winograd: one TDPBF16PS is 16x16x32 multiply-adds, 16 times the FMA
+// units' rate, so the four-fold saving of Winograd no longer pays for its transforms (which
+// were a fifth of stage 1 in fp32), and Winograd's large intermediate values would lose
+// more to bf16's 8-bit mantissa than the direct sum does.
+//
+// Algorithm: the input is copied once per call into bf16 with its zero padding, as
+// [ICP][rows][32] (ICP = pairs of 16-channel blocks: one 64-byte tile row is 32 channels of
+// one pixel, in channel order). On that padded plane of width Wp the output pixel (oh, ow)
+// is row oh*Wp+ow and tap (i, j) reads the input row oh*Wp+ow + i*Wp+j, so 16 consecutive
+// output rows are 16 consecutive input rows for every tap: one tile load, no gather. The
+// Wp-OW rows per line that fall in the padding are computed and dropped. A task is 32
+// output rows x 32 channels in four fp32 accumulator tiles; weights are packed once as
+// [OCB][ICP][KH][KW] tiles of 16 channel pairs x 16 outputs x 2 (the pairs TDPBF16PS reads).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "kernels/conv.h"
+
+namespace yelan::kernels {
+
+// The CPU has AMX-TILE and AMX-BF16, the OS saves tile state, and this process was granted
+// it (Linux arch_prctl ARCH_REQ_XCOMP_PERM, asked once). False on every other build.
+bool amx_bf16_available();
+bool conv_bf16_applicable(const ConvShape& s);  // stride 1 (and valid)
+
+std::size_t conv_bf16_weight_halves(const ConvShape& s);
+void pack_conv_bf16_weights(const ConvShape& s, const float* w_oihw, std::uint16_t* out);
+// Same contract as ConvKernels::fwd (bias may be null, s.relu fused). amx_bf16_available()
+// must hold; throws std::logic_error otherwise.
+void conv_fwd_bf16_amx(const ConvShape& s, const float* x, const std::uint16_t* w_bf16, const float* bias, float* y);
+
+// The U-Net's up-sampling, a 2x2 stride-2 transposed convolution (no padding): per output
+// phase (dy, dx) a 1x1 convolution of the input, so one GEMM over the input's pixels with
+// four times the output channels, each accumulator row stored at (2h + dy, 2w + dx).
+// Weights are PyTorch's (in, out, 2, 2), packed as [4 phases x OCB][ICP] tiles.
+bool deconv2x2_bf16_applicable(const DeconvShape& d);
+std::size_t deconv2x2_bf16_weight_halves(const DeconvShape& d);
+void pack_deconv2x2_bf16_weights(const DeconvShape& d, const float* w_iohw, std::uint16_t* out);
+void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uint16_t* w_bf16, const float* bias,
+                            float* y);
+void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w_iohw, const float* bias, float* y);
+
+// bf16 as AMX reads it: round to nearest even, subnormals to signed zero, NaN kept NaN.
+std::uint16_t to_bf16(float v);
+float from_bf16(std::uint16_t h);
+// The reference: the convolution of the bf16-rounded x and w (OIHW), summed in double.
+void conv_fwd_bf16_reference(const ConvShape& s, const float* x, const float* w_oihw, const float* bias, float* y);
+
+}  // namespace yelan::kernels

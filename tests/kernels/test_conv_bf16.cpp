@@ -1,0 +1,158 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+
+#include "conv_reference.h"
+#include "kernels/conv_bf16.h"
+#include "test_util.h"
+
+using namespace yelan::kernels;
+using yelan::test::padding_is_zero;
+using yelan::test::random_floats;
+using yelan::test::to_blocked;
+
+namespace {
+
+struct Case {
+  int n, ic, ih, iw, oc, k, pad;
+};
+
+ConvShape shape_of(const Case& c, bool relu) {
+  ConvShape s;
+  s.n = c.n; s.ic = c.ic; s.ih = c.ih; s.iw = c.iw; s.oc = c.oc;
+  s.kh = s.kw = c.k; s.pad_h = s.pad_w = c.pad; s.relu = relu;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("bf16 rounding is to nearest even, subnormals to zero, NaN kept", "[conv_bf16]") {
+  CHECK(to_bf16(1.f) == 0x3f80);
+  CHECK(to_bf16(-2.f) == 0xc000);
+  // 1 + 2^-8 lies halfway between 1 and 1 + 2^-7: even (1) wins; 1 + 3 * 2^-8 rounds up to 1 + 2^-6
+  CHECK(from_bf16(to_bf16(1.f + std::ldexp(1.f, -8))) == 1.f);
+  CHECK(from_bf16(to_bf16(1.f + 3 * std::ldexp(1.f, -8))) == 1.f + std::ldexp(1.f, -6));
+  CHECK(from_bf16(to_bf16(1.f + std::ldexp(1.f, -8) + std::ldexp(1.f, -20))) == 1.f + std::ldexp(1.f, -7));
+  CHECK(to_bf16(std::numeric_limits<float>::denorm_min()) == 0);
+  CHECK(to_bf16(-std::numeric_limits<float>::denorm_min()) == 0x8000);
+  CHECK(std::isnan(from_bf16(to_bf16(std::numeric_limits<float>::quiet_NaN()))));
+  CHECK(std::isinf(from_bf16(to_bf16(std::numeric_limits<float>::infinity()))));
+  CHECK(from_bf16(to_bf16(std::numeric_limits<float>::max())) == std::numeric_limits<float>::infinity());  // past bf16 largest
+}
+
+TEST_CASE("conv_bf16 applies to stride 1 alone, and refuses to run without AMX", "[conv_bf16]") {
+  ConvShape s = shape_of({1, 8, 5, 5, 8, 3, 1}, false);
+  CHECK(conv_bf16_applicable(s));
+  s.stride = 2;
+  CHECK_FALSE(conv_bf16_applicable(s));
+  if (!amx_bf16_available()) {
+    s.stride = 1;
+    std::vector<float> x(200 * 16), y(200 * 16);
+    std::vector<std::uint16_t> w(conv_bf16_weight_halves(s));
+    CHECK_THROWS_AS(conv_fwd_bf16_amx(s, x.data(), w.data(), nullptr, y.data()), std::logic_error);
+  }
+}
+
+// The AMX kernel against the reference on the rounded operands, on odd shapes: channel
+// counts that leave half a pair (16, 48: an odd number of blocks) or a part block (6, 24, 40),
+// an odd number of output blocks, maps narrower and shorter than a 32-row task, 1x1, 3x3, 5x5.
+TEST_CASE("conv_bf16 on AMX equals the bf16 reference on odd shapes, with bias and fused ReLU", "[conv_bf16]") {
+  yelan::test::amx_or_skip();
+  const Case cases[] = {
+      {1, 6, 13, 17, 24, 3, 1},  {1, 24, 9, 21, 24, 3, 1},  {1, 48, 8, 10, 48, 3, 1}, {2, 40, 7, 5, 40, 3, 1},
+      {1, 16, 1, 1, 17, 1, 0},   {1, 24, 11, 12, 16, 1, 0}, {1, 33, 6, 9, 70, 5, 2},  {1, 96, 16, 21, 96, 3, 1},
+      {1, 3, 2, 3, 5, 3, 1},     {1, 64, 33, 43, 32, 3, 0},
+  };
+  double worst = 0;
+  for (const Case& c : cases)
+    for (bool relu : {false, true}) {
+      const ConvShape s = shape_of(c, relu);
+      INFO("n " << c.n << " ic " << c.ic << " " << c.ih << "x" << c.iw << " oc " << c.oc << " k " << c.k << " pad "
+                << c.pad << " relu " << relu);
+      const auto x = random_floats(std::size_t(c.n) * c.ic * c.ih * c.iw, 11 + c.ic);
+      const auto w = random_floats(std::size_t(c.oc) * c.ic * c.k * c.k, 23 + c.oc);
+      std::vector<float> bias(std::size_t(s.ocb()) * kBlock, 0.f);
+      const auto b = random_floats(std::size_t(c.oc), 5);
+      std::copy(b.begin(), b.end(), bias.begin());
+      const auto xb = to_blocked(x, c.n, c.ic, c.ih, c.iw);
+      std::vector<std::uint16_t> wp(conv_bf16_weight_halves(s));
+      pack_conv_bf16_weights(s, w.data(), wp.data());
+      const std::size_t ny = std::size_t(c.n) * s.ocb() * s.oh() * s.ow() * kBlock;
+      std::vector<float> y(ny, -7.f), ref(ny);
+      conv_fwd_bf16_amx(s, xb.data(), wp.data(), bias.data(), y.data());
+      conv_fwd_bf16_reference(s, xb.data(), w.data(), bias.data(), ref.data());
+      CHECK(padding_is_zero(y, c.n, c.oc, s.oh(), s.ow()));
+      // |x w| summed over one output's taps bounds fp32 summation error; random inputs in
+      // [-1, 1] make it at most ic * k * k.
+      const double scale = double(c.ic) * c.k * c.k;
+      int negatives = 0;
+      for (std::size_t i = 0; i < ny; ++i) {
+        const double e = std::fabs(double(y[i]) - ref[i]) / scale;
+        worst = std::max(worst, e);
+        REQUIRE(e <= 2e-6);
+        negatives += ref[i] < 0;
+        if (relu) REQUIRE(y[i] >= 0.f);
+      }
+      if (!relu) CHECK(negatives > 0);
+    }
+  WARN("conv_bf16 on AMX worst error against the bf16 reference, relative to ic k k: " << worst);
+}
+
+TEST_CASE("conv_bf16 stays within bf16's rounding of the fp32 convolution", "[conv_bf16]") {
+  yelan::test::amx_or_skip();
+  // The rounding itself: each operand within 2^-9 relative, so each product within 2^-8,
+  // and the sum within 2^-8 x sum |x w| of the fp32 convolution.
+  const ConvShape s = shape_of({1, 48, 12, 14, 40, 3, 1}, false);
+  const auto x = random_floats(std::size_t(48) * 12 * 14, 3);
+  const auto w = random_floats(std::size_t(40) * 48 * 9, 4);
+  const auto xb = to_blocked(x, 1, 48, 12, 14);
+  std::vector<std::uint16_t> wp(conv_bf16_weight_halves(s));
+  pack_conv_bf16_weights(s, w.data(), wp.data());
+  const std::size_t ny = std::size_t(s.ocb()) * 12 * 14 * kBlock;
+  std::vector<float> y(ny), ref(ny);
+  conv_fwd_bf16_amx(s, xb.data(), wp.data(), nullptr, y.data());
+  std::vector<float> wf(conv_weight_floats(s));
+  pack_conv_weights(s, w.data(), ConvPack::fwd, wf.data());
+  conv_scalar.fwd(s, xb.data(), wf.data(), nullptr, ref.data());
+  double worst = 0, differ = 0;
+  for (std::size_t i = 0; i < ny; ++i) {
+    worst = std::max(worst, std::fabs(double(y[i]) - ref[i]) / (48.0 * 9));
+    differ += y[i] != ref[i];
+  }
+  CHECK(worst <= std::ldexp(1.0, -8));
+  CHECK(differ > ny / 4);  // it is bf16: most outputs differ from fp32
+}
+
+TEST_CASE("the 2x2/2 transposed convolution in bf16 on AMX equals its bf16 reference", "[conv_bf16]") {
+  DeconvShape d;
+  d.kh = d.kw = 2;
+  d.stride = 2;
+  CHECK(deconv2x2_bf16_applicable([&] { DeconvShape e = d; e.ic = e.oc = e.ih = e.iw = 3; return e; }()));
+  CHECK_FALSE(deconv2x2_bf16_applicable([&] { DeconvShape e = d; e.ic = e.oc = e.ih = e.iw = 3; e.out_pad_h = 1; return e; }()));
+  yelan::test::amx_or_skip();
+  struct C {
+    int n, ic, ih, iw, oc;
+  };
+  // the U-Net's ups (384->192 at 8x10, 48->24 over many rows), odd channels, a 1x1 input, a batch of 2
+  for (const C& c : {C{1, 384, 8, 10, 192}, C{1, 48, 33, 43, 24}, C{1, 40, 5, 7, 20}, C{1, 16, 1, 1, 8}, C{2, 24, 6, 9, 40}}) {
+    INFO("n " << c.n << " ic " << c.ic << " " << c.ih << "x" << c.iw << " oc " << c.oc);
+    d.n = c.n; d.ic = c.ic; d.ih = c.ih; d.iw = c.iw; d.oc = c.oc;
+    const auto x = random_floats(std::size_t(c.n) * c.ic * c.ih * c.iw, 3 + c.ic);
+    const auto w = random_floats(std::size_t(c.ic) * c.oc * 4, 7 + c.oc);
+    std::vector<float> bias((c.oc + 15) / 16 * 16, 0.f);
+    const auto b = random_floats(std::size_t(c.oc), 2);
+    std::copy(b.begin(), b.end(), bias.begin());
+    const auto xb = to_blocked(x, c.n, c.ic, c.ih, c.iw);
+    std::vector<std::uint16_t> wp(deconv2x2_bf16_weight_halves(d));
+    pack_deconv2x2_bf16_weights(d, w.data(), wp.data());
+    const std::size_t ny = std::size_t(c.n) * ((c.oc + 15) / 16) * d.oh() * d.ow() * kBlock;
+    std::vector<float> y(ny, -7.f), ref(ny);
+    deconv2x2_fwd_bf16_amx(d, xb.data(), wp.data(), bias.data(), y.data());
+    deconv2x2_fwd_bf16_reference(d, xb.data(), w.data(), bias.data(), ref.data());
+    CHECK(padding_is_zero(y, c.n, c.oc, d.oh(), d.ow()));
+    for (std::size_t i = 0; i < ny; ++i) REQUIRE(std::fabs(double(y[i]) - ref[i]) <= 2e-6 * c.ic);
+  }
+}
