@@ -75,8 +75,12 @@ class MaskNet : public layers::Module<MaskNet> {
     have_zero_ = false;
     Module::weights_changed();
   }
-  // Inference in bf16 on AMX where the CPU has it (layers::bf16_convs; run.bf16 by default).
-  void set_bf16(bool on) { bf16_ = on; }
+  // Inference in bf16 on AMX where the CPU has it (layers::bf16_convs). Off unless set: the
+  // pipeline sets the model's run.bf16 (or --bf16); training and frame-by-frame eval run fp32.
+  void set_bf16(bool on) {
+    if (on != bf16_) have_zero_ = false;  // forward_cropped's empty frame, computed at the other precision
+    bf16_ = on;
+  }
   bool bf16() const { return bf16_; }
   const layers::Act& masks() const { return masks_; }        // n x N logits x H x W
   const std::vector<float>& scores() const { return scores_; }  // n x N, after the sigmoid
@@ -92,7 +96,7 @@ class MaskNet : public layers::Module<MaskNet> {
   void score_head(int n);
   static constexpr int kLevels = 4;  // the U-Net's depth: 4 downs, 4 ups (the architecture's, not a config's)
   ModelConfig cfg_;
-  bool bf16_ = cfg_.run_bf16;
+  bool bf16_ = false;
   int w_[kLevels + 1];
   DoubleConv inc_;
   std::vector<std::unique_ptr<DoubleConv>> down_, up_conv_;

@@ -106,7 +106,9 @@ struct ModelConfig {
   //   a frame from 4 frames on) while the score falls too little to see it.
   //   run.bf16 (optional, default false): stage 1's convolutions (those of kernel > 1x1 of
   //   its eval-mode ConvBns, and its 2x2 up-sampling) in bf16 on the CPU's AMX tiles where it
-  //   has them (Intel Sapphire Rapids and later; kernels/conv_bf16.h), fp32 elsewhere.
+  //   has them (Intel Sapphire Rapids and later; kernels/conv_bf16.h), fp32 elsewhere. The
+  //   deployed path's (yelan run, eval --run, calibrate, bench run and early-exit); training and
+  //   frame-by-frame eval stay fp32.
   //   run.mask_max_age_bf16 (optional, default run.mask_max_age): the age cap where stage 1
   //   does run in bf16: a stage 1 2.6 times cheaper affords running it more often within the
   //   same pose rate, and the fresher masks fit better.

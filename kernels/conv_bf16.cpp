@@ -14,10 +14,7 @@
 namespace yelan::kernels {
 
 #if defined(__x86_64__)
-// conv_bf16_amx.cpp, compiled with AMX flags
-void conv_fwd_bf16_amx_tiles(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias, float* y);
-void deconv2x2_fwd_bf16_amx_tiles(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias,
-                                  float* y);
+extern const AmxBf16Kernels amx_bf16_kernels;  // conv_bf16_amx.cpp, compiled with AMX flags
 #endif
 
 bool amx_bf16_available() {
@@ -35,6 +32,8 @@ bool amx_bf16_available() {
   return false;
 #endif
 }
+
+bool amx_bf16_enabled() { return amx_bf16_available() && active_isa() == Isa::avx512; }
 
 bool conv_bf16_applicable(const ConvShape& s) { return s.valid() && s.stride == 1; }
 
@@ -102,7 +101,7 @@ void conv_fwd_bf16_amx(const ConvShape& s, const float* x, const std::uint16_t* 
   if (!conv_bf16_applicable(s)) throw std::invalid_argument("conv_fwd_bf16_amx: stride 1 convolutions only");
   if (!amx_bf16_available()) throw std::logic_error("conv_fwd_bf16_amx: this CPU or OS gives no AMX-BF16");
 #if defined(__x86_64__)
-  conv_fwd_bf16_amx_tiles(s, x, w, bias, y);
+  amx_bf16_kernels.conv(s, x, w, bias, y);
 #else
   (void)x; (void)w; (void)bias; (void)y;
 #endif
@@ -152,7 +151,7 @@ void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uin
     throw std::invalid_argument("deconv2x2_fwd_bf16_amx: 2x2 stride-2 transposed convolutions without padding only");
   if (!amx_bf16_available()) throw std::logic_error("deconv2x2_fwd_bf16_amx: this CPU or OS gives no AMX-BF16");
 #if defined(__x86_64__)
-  deconv2x2_fwd_bf16_amx_tiles(d, x, w, bias, y);
+  amx_bf16_kernels.deconv2x2(d, x, w, bias, y);
 #else
   (void)x; (void)w; (void)bias; (void)y;
 #endif

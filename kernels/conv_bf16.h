@@ -47,6 +47,16 @@ void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uin
                             float* y);
 void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w_iohw, const float* bias, float* y);
 
+// What conv_bf16_amx.cpp exports: its kernels behind a table, as the ISA variant files do.
+struct AmxBf16Kernels {
+  void (*conv)(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias, float* y);
+  void (*deconv2x2)(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias, float* y);
+};
+
+// Whether the bf16 path is to run now: amx_bf16_available() and no narrower ISA forced
+// (YELAN_ISA, --isa: a run pinned to avx2 or scalar stays off AVX-512 and AMX).
+bool amx_bf16_enabled();
+
 // bf16 as AMX reads it: round to nearest even, subnormals to signed zero, NaN kept NaN.
 std::uint16_t to_bf16(float v);
 float from_bf16(std::uint16_t h);

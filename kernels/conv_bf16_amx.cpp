@@ -111,10 +111,6 @@ void fill_line(const ConvShape& s, const float* x, int n, int ip, std::ptrdiff_t
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The tile loop over a convolution's geometry s (stride 1; for the transposed convolution
 // its 1x1 per phase, s.oc = 4 x its output channels in nb blocks), into o.
 void run_tiles(const ConvShape& s, int nblocks, const float* x, const std::uint16_t* w, Out o, std::ptrdiff_t y_image) {
@@ -169,16 +165,12 @@ void run_tiles(const ConvShape& s, int nblocks, const float* x, const std::uint1
   }
 }
 
-}  // namespace
-
-void conv_fwd_bf16_amx_tiles(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias,
-                             float* y) {
+void conv_tiles(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias, float* y) {
   const Out o{y, bias, s.oh(), s.ow(), s.ocb(), 0, 1, s.relu};
   run_tiles(s, s.ocb(), x, w, o, std::ptrdiff_t(s.ocb()) * s.oh() * s.ow() * kBlock);
 }
 
-void deconv2x2_fwd_bf16_amx_tiles(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias,
-                                  float* y) {
+void deconv2x2_tiles(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias, float* y) {
   ConvShape s;  // the transposed convolution's 1x1 over its input, four phases of outputs
   s.n = d.n; s.ic = d.ic; s.ih = d.ih; s.iw = d.iw; s.kh = s.kw = 1;
   const int OCB = (d.oc + kBlock - 1) / kBlock;
@@ -186,5 +178,11 @@ void deconv2x2_fwd_bf16_amx_tiles(const DeconvShape& d, const float* x, const st
   const Out o{y, bias, d.oh(), d.ow(), OCB, 0, 2, false};
   run_tiles(s, 4 * OCB, x, w, o, std::ptrdiff_t(OCB) * d.oh() * d.ow() * kBlock);
 }
+
+}  // namespace
+
+// Only this table leaves the file (scripts/check-isa-leaks: no exported function may touch
+// ymm/zmm registers, since baseline code could call it on any CPU).
+extern const AmxBf16Kernels amx_bf16_kernels{conv_tiles, deconv2x2_tiles};
 
 }  // namespace yelan::kernels

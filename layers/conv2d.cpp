@@ -32,7 +32,7 @@ bool& bf16_convs() {
 // A 1x1 convolution is a copy into bf16 and a pass over the result as much as a product
 // (stage 1's 24->16 output layer: 0.25 against 0.15 ms in fp32), so it stays fp32.
 bool takes_bf16(const kernels::ConvShape& s) {
-  return bf16_convs() && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s) && kernels::amx_bf16_available();
+  return bf16_convs() && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s) && kernels::amx_bf16_enabled();
 }
 
 std::vector<ConvRecord>*& conv_trace() {
@@ -144,7 +144,7 @@ void Conv2d::check_io(const Act& x, const Act& y) const {
 void Conv2d::forward(const Act& x, const Act& y, bool winograd) {
   check_io(x, y);
   pack(conv_shape(x));
-  if (spec_.transposed && !grad_enabled() && bf16_convs() && kernels::amx_bf16_available() &&
+  if (spec_.transposed && !grad_enabled() && bf16_convs() && kernels::amx_bf16_enabled() &&
       kernels::deconv2x2_bf16_applicable(deconv_shape(x))) {
     const kernels::DeconvShape d = deconv_shape(x);
     if (up_bf16_.empty()) {
@@ -179,7 +179,7 @@ void Conv2d::pack_folded(const kernels::ConvShape& s, const float* scale, const 
   fold_bias16_ = Floats(std::size_t((spec_.out + 15) / 16) * 16);
   for (int o = 0; o < spec_.out; ++o) fold_bias16_[o] = shift[o] + (bias ? scale[o] * bias->value[o] : 0.f);
   fold_bf16_.clear();
-  if (!spec_.transposed && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s) && kernels::amx_bf16_available()) {
+  if (!spec_.transposed && takes_bf16(s)) {  // packed when first asked for (forward_folded repacks then)
     fold_bf16_.resize(kernels::conv_bf16_weight_halves(s));
     kernels::pack_conv_bf16_weights(s, w.data(), fold_bf16_.data());
   }
@@ -189,9 +189,11 @@ void Conv2d::pack_folded(const kernels::ConvShape& s, const float* scale, const 
 void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd,
                             bool relu) {
   check_io(x, y);
-  pack_folded(conv_shape(x), scale, shift);
   kernels::ConvShape s = conv_shape(x);
-  if (!fold_bf16_.empty() && takes_bf16(s)) {
+  const bool bf16 = !spec_.transposed && takes_bf16(s);
+  if (bf16 && fold_bf16_.empty()) folded_ = false;  // folded before bf16 was asked for: fold again
+  pack_folded(s, scale, shift);
+  if (bf16) {
     s.relu = relu;
     record(x, y, s);
     kernels::conv_fwd_bf16_amx(s, x.data, fold_bf16_.data(), fold_bias16_.data(), y.data);

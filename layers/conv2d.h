@@ -90,7 +90,7 @@ class Conv2d {
   bool folded_ = false;
   Floats fwd_, bwd_, wino_, bias16_, dw_packed_, db16_, dw_plain_;
   Floats fold_w_, fold_wino_, fold_bias16_;
-  std::vector<std::uint16_t> fold_bf16_;  // the folded weights for the bf16 kernel, where it can run
+  std::vector<std::uint16_t> fold_bf16_;  // the folded weights for the bf16 kernel, once it is asked for
   std::vector<std::uint16_t> up_bf16_;    // a 2x2/2 transposed conv's, packed on its first bf16 forward
   kernels::ConvShape conv_shape(const Act& x) const;   // the kernel's conv (for a deconv: its adjoint)
   kernels::DeconvShape deconv_shape(const Act& x) const;

@@ -1293,7 +1293,7 @@ TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX, and there r
   yelan::test::CliTempDir d("bf16");
   const std::vector<std::string> recs = dancer_and_empty(d);
   const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
-  const bool amx = yelan::kernels::amx_bf16_available();
+  const bool amx = yelan::kernels::amx_bf16_enabled();
   std::ostringstream progress;
   const auto run = [&](std::optional<bool> bf16, std::optional<int> max_age) {
     yelan::run::RunOptions o;

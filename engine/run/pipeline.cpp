@@ -181,8 +181,8 @@ struct PosePipeline::Impl {
     joint_smoother = JointSmoother(nets.cfg.pose_tau_s);
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
-    if (o.bf16) nets.mask.set_bf16(*o.bf16);
-    stage1_bf16 = nets.mask.bf16() && kernels::amx_bf16_available();
+    nets.mask.set_bf16(o.bf16.value_or(cfg.run_bf16));
+    stage1_bf16 = nets.mask.bf16() && kernels::amx_bf16_enabled();
     if (stage1_bf16 && cfg.mask_max_age_bf16) nets.cfg.mask_max_age = *cfg.mask_max_age_bf16;
     if (o.mask_max_age) {
       if (*o.mask_max_age < 0) throw std::invalid_argument("mask_max_age must be >= 0 (frames; 0: none)");
