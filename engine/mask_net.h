@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "camera/pixel_rect.h"
 #include "engine/model_config.h"
 #include "layers/blocks.h"
 #include "layers/module.h"
@@ -66,10 +67,7 @@ class MaskNet : public layers::Module<MaskNet> {
   // the box but for the halo's truncation; the score head pools the frame so composed. Returns
   // the box run (the whole frame, forward() itself, where the box is empty, covers the frame,
   // or mask.pool > 1).
-  struct Box {
-    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-    bool empty() const { return x1 <= x0 || y1 <= y0; }
-  };
+  using Box = camera::PixelRect;
   Box forward_cropped(const layers::Act& x, Box box);
   void weights_changed() {
     have_zero_ = false;
@@ -77,10 +75,7 @@ class MaskNet : public layers::Module<MaskNet> {
   }
   // Inference in bf16 on AMX where the CPU has it (layers::bf16_convs). Off unless set: the
   // pipeline sets the model's run.bf16 (or --bf16); training and frame-by-frame eval run fp32.
-  void set_bf16(bool on) {
-    if (on != bf16_) have_zero_ = false;  // forward_cropped's empty frame, computed at the other precision
-    bf16_ = on;
-  }
+  void set_bf16(bool on) { bf16_ = on; }
   bool bf16() const { return bf16_; }
   const layers::Act& masks() const { return masks_; }        // n x N logits x H x W
   const std::vector<float>& scores() const { return scores_; }  // n x N, after the sigmoid
@@ -130,6 +125,7 @@ class MaskNet : public layers::Module<MaskNet> {
   std::vector<float> zero_top_sum_;  // the zero frame's top, summed per channel over the frame
   layers::ActBuf win_a_, win_b_, win_cat_, win_out_, gap_win_;
   bool have_zero_ = false, cropped_ = false;
+  bool zero_bf16_ = false;  // the precision the empty frame was computed at (layers::bf16_active)
   // backward only, each dL/d the activation it is named after
   layers::ActBuf d_top_;                      // the last up block's output (what outc and the score head read)
   layers::ActBuf d_gap_, d_s1_, d_top_gap_, d_top_score_;  // the score head; d_top_score_ is its share of d_top_

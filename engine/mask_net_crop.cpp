@@ -14,26 +14,23 @@ using Box = MaskNet::Box;
 
 namespace {
 
-Box clip(const Box& b, int h, int w) { return {std::max(0, b.x0), std::max(0, b.y0), std::min(w, b.x1), std::min(h, b.y1)}; }
-Box grow(const Box& b, int g, const Act& in) { return clip({b.x0 - g, b.y0 - g, b.x1 + g, b.y1 + g}, in.h, in.w); }
-int bh(const Box& b) { return b.y1 - b.y0; }
-int bw(const Box& b) { return b.x1 - b.x0; }
+Box grow(const Box& b, int g, const Act& in) { return Box{b.x0 - g, b.y0 - g, b.x1 + g, b.y1 + g}.clipped(in.w, in.h); }
 
 // `src` inside b, as a map of its own.
 Act window(const Act& src, const Box& b, layers::ActBuf& buf) {
-  const Act w = buf.get(1, src.c, bh(b), bw(b));
-  layers::copy_window(src, b.y0, b.x0, w, 0, 0, bh(b), bw(b));
+  const Act w = buf.get(1, src.c, b.height(), b.width());
+  layers::copy_window(src, b.y0, b.x0, w, 0, 0, b.height(), b.width());
   return w;
 }
 
 // The part `part` of a window whose top-left is at `origin` of the frame, written into dst.
 void put(const Act& win, const Box& origin, const Box& part, const Act& dst) {
-  layers::copy_window(win, part.y0 - origin.y0, part.x0 - origin.x0, dst, part.y0, part.x0, bh(part), bw(part));
+  layers::copy_window(win, part.y0 - origin.y0, part.x0 - origin.x0, dst, part.y0, part.x0, part.height(), part.width());
 }
 
 // Undoes the last run's writes: dst inside b back to the zero frame's.
 void restore(const Act& zero_frame, const Act& dst, Box& b) {
-  if (!b.empty()) layers::copy_window(zero_frame, b.y0, b.x0, dst, b.y0, b.x0, bh(b), bw(b));
+  if (!b.empty()) layers::copy_window(zero_frame, b.y0, b.x0, dst, b.y0, b.x0, b.height(), b.width());
   b = {};
 }
 
@@ -64,6 +61,7 @@ void MaskNet::prepare_zero_frame(int channels) {
   written_up_.fill({});
   written_mask_ = {};
   have_zero_ = true;
+  zero_bf16_ = layers::bf16_active();
 }
 
 Box MaskNet::forward_cropped(const Act& x, Box box) {
@@ -71,18 +69,18 @@ Box MaskNet::forward_cropped(const Act& x, Box box) {
   if (layers::grad_enabled() || x.n != 1) throw std::logic_error("mask net: forward_cropped is for inference on one frame (NoGrad)");
   const layers::Bf16Convs precision(bf16_);
   const int H = x.h, W = x.w, a = 1 << kLevels;
-  box = clip({box.x0 / a * a, box.y0 / a * a, (box.x1 + a - 1) / a * a, (box.y1 + a - 1) / a * a}, H, W);
+  box = Box{box.x0 / a * a, box.y0 / a * a, (box.x1 + a - 1) / a * a, (box.y1 + a - 1) / a * a}.clipped(W, H);
   if (box.empty() || cfg_.mask_pool > 1 || (box.x0 == 0 && box.y0 == 0 && box.x1 == W && box.y1 == H)) {
     forward(x);
     return {0, 0, W, H};
   }
-  if (!have_zero_) prepare_zero_frame(x.c);
+  if (!have_zero_ || zero_bf16_ != layers::bf16_active()) prepare_zero_frame(x.c);
   // Each level's box: the input box's cells there, grown by the halo.
   std::array<Box, kLevels + 1> r;
   for (int k = 0; k <= kLevels; ++k) {
     const int s = 1 << k;
-    r[k] = clip({box.x0 / s - kCropHalo, box.y0 / s - kCropHalo, (box.x1 + s - 1) / s + kCropHalo, (box.y1 + s - 1) / s + kCropHalo},
-                zx_[k].act.h, zx_[k].act.w);
+    r[k] = Box{box.x0 / s - kCropHalo, box.y0 / s - kCropHalo, (box.x1 + s - 1) / s + kCropHalo, (box.y1 + s - 1) / s + kCropHalo}
+               .clipped(zx_[k].act.w, zx_[k].act.h);
   }
   // inc, then down: each double convolution reads its box grown by 2 (two 3x3 layers) and
   // keeps the box, where the window's own zero padding cannot reach.
@@ -110,7 +108,7 @@ Box MaskNet::forward_cropped(const Act& x, Box box) {
     restore(zpad_[k].act, cpad_[k].act, written_pad_[k]);
     restore(zup_[k].act, cup_[k].act, written_up_[k]);
     const Box in = grow(r[level], 2, skip);
-    const Box cells = clip({in.x0 / 2, in.y0 / 2, (in.x1 + 1) / 2, (in.y1 + 1) / 2}, below.h, below.w);
+    const Box cells = Box{in.x0 / 2, in.y0 / 2, (in.x1 + 1) / 2, (in.y1 + 1) / 2}.clipped(below.w, below.h);
     const Act tin = window(below, cells, win_a_);
     const Act t = win_out_.like(up_[k]->out_shape(tin));
     up_[k]->forward(tin, t);
@@ -118,7 +116,7 @@ Box MaskNet::forward_cropped(const Act& x, Box box) {
     put(t, up_box, up_box, cpad_[k].act);
     written_pad_[k] = up_box;
     const Act sa = window(skip, in, win_a_), sb = window(cpad_[k].act, in, win_b_);
-    const Act cat = win_cat_.get(1, sa.c + sb.c, bh(in), bw(in));
+    const Act cat = win_cat_.get(1, sa.c + sb.c, in.height(), in.width());
     layers::concat_channels(sa, sb, cat);
     put(up_conv_[k]->forward(cat), in, r[level], cup_[k].act);
     written_up_[k] = r[level];
@@ -137,7 +135,7 @@ Box MaskNet::forward_cropped(const Act& x, Box box) {
   layers::global_avg_pool_forward(top, top_gap_);
   const Act zero_gap = gap_win_.get(1, top.c, 1, 1);
   layers::global_avg_pool_forward(window(zup_[kLevels - 1].act, r0, win_b_), zero_gap);
-  const float area = float(bh(r0)) * float(bw(r0)), frame = float(H) * float(W);
+  const float area = float(r0.height()) * float(r0.width()), frame = float(H) * float(W);
   for (std::size_t i = 0; i < top_gap_.floats(); ++i)
     top_gap_.data[i] = (zero_top_sum_[i] + area * (top_gap_.data[i] - zero_gap.data[i])) / frame;
   score_head(1);

@@ -7,6 +7,7 @@
 #include <memory>
 #include <vector>
 
+#include "camera/pixel_rect.h"
 #include "engine/model_config.h"
 #include "layers/blocks.h"
 #include "layers/convlstm.h"
@@ -50,10 +51,7 @@ class PoseNet : public layers::Module<PoseNet> {
   void forward(const layers::Act& x, int frames_per_window);
 
   // Model-input pixels [x0, x1) x [y0, y1); empty: nothing but zeros in the input.
-  struct CropBox {
-    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-    bool empty() const { return x1 <= x0 || y1 <= y0; }
-  };
+  using CropBox = camera::PixelRect;
   // Inference only: forward() for an input that is zero outside `box` (a masked frame).
   // The ResNet head runs on the box widened to multiples of its stride (pose.head_stride), so the crop's
   // pixel grid is the frame's; elsewhere its features are those of an all-zero frame

@@ -72,6 +72,8 @@ struct DeconvShape {
   int stride = 1, pad_h = 0, pad_w = 0, out_pad_h = 0, out_pad_w = 0;
   int oh() const { return (ih - 1) * stride - 2 * pad_h + kh + out_pad_h; }
   int ow() const { return (iw - 1) * stride - 2 * pad_w + kw + out_pad_w; }
+  int icb() const { return (ic + kBlock - 1) / kBlock; }
+  int ocb() const { return (oc + kBlock - 1) / kBlock; }
   ConvShape as_conv() const { return {n, oc, oh(), ow(), ic, kh, kw, stride, pad_h, pad_w}; }
   bool valid() const {
     return out_pad_h >= 0 && out_pad_w >= 0 && out_pad_h < stride && out_pad_w < stride && oh() > 0 &&

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <mutex>
 #include <stdexcept>
+#include <vector>
 
 #if defined(__x86_64__)
 #include <sys/syscall.h>
@@ -21,7 +21,7 @@ bool amx_bf16_available() {
 #if defined(__x86_64__) && defined(__linux__)
   static const bool granted = [] {
     const CpuFeatures& f = cpu_features();
-    if (!f.amx_tile || !f.amx_bf16 || !f.avx512bf16 || !f.avx512f || !f.avx512bw) return false;
+    if (!f.amx_tile || !f.amx_bf16 || !f.avx512bf16 || !f.avx512f || !f.avx512bw || !f.avx512vl) return false;
     // Linux hands out the 8 KB of tile state only on request (ARCH_REQ_XCOMP_PERM for
     // XFEATURE_XTILEDATA), once for the whole process and every thread it starts.
     constexpr long kReqXcompPerm = 0x1023, kXtileData = 18;
@@ -37,25 +37,20 @@ bool amx_bf16_enabled() { return amx_bf16_available() && active_isa() == Isa::av
 
 bool conv_bf16_applicable(const ConvShape& s) { return s.valid() && s.stride == 1; }
 
-namespace {
-int pairs(const ConvShape& s) { return (s.icb() + 1) / 2; }
-}  // namespace
-
 std::size_t conv_bf16_weight_halves(const ConvShape& s) {
-  return std::size_t(s.ocb()) * pairs(s) * s.kh * s.kw * 16 * 32;
+  return std::size_t(s.ocb()) * bf16_pairs(s.icb()) * s.kh * s.kw * 16 * 32;
 }
 
 void pack_conv_bf16_weights(const ConvShape& s, const float* w, std::uint16_t* out) {
   std::memset(out, 0, conv_bf16_weight_halves(s) * sizeof(std::uint16_t));
-  const int ICP = pairs(s);
+  const int ICP = bf16_pairs(s.icb());
   for (int o = 0; o < s.oc; ++o)
     for (int i = 0; i < s.ic; ++i)
       for (int y = 0; y < s.kh; ++y)
         for (int x = 0; x < s.kw; ++x) {
           const int ob = o / kBlock, n = o % kBlock, ip = i / 32, k = i % 32;
-          // tile row k/2 holds input channels k and k+1 of all 16 outputs, interleaved
           const std::size_t tile = ((std::size_t(ob) * ICP + ip) * s.kh + y) * s.kw + x;
-          out[tile * 512 + (k / 2) * 32 + n * 2 + k % 2] = to_bf16(w[((std::size_t(o) * s.ic + i) * s.kh + y) * s.kw + x]);
+          out[tile * 512 + bf16_tile_index(k, n)] = to_bf16(w[((std::size_t(o) * s.ic + i) * s.kh + y) * s.kw + x]);
         }
 }
 
@@ -75,26 +70,31 @@ float from_bf16(std::uint16_t h) {
   return v;
 }
 
+namespace {
+std::vector<float> rounded_to_bf16(const float* v, std::size_t n) {
+  std::vector<float> r(n);
+  for (std::size_t i = 0; i < n; ++i) r[i] = from_bf16(to_bf16(v[i]));
+  return r;
+}
+}  // namespace
+
+// The references are the scalar fp32 kernels on the rounded operands: what the tiles compute
+// up to the order of the fp32 sums.
 void conv_fwd_bf16_reference(const ConvShape& s, const float* x, const float* w, const float* bias, float* y) {
-  const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb();
-  std::memset(y, 0, std::size_t(s.n) * OCB * OH * OW * kBlock * sizeof(float));
-  auto bf = [](float v) { return double(from_bf16(to_bf16(v))); };
-  for (int n = 0; n < s.n; ++n)
-    for (int o = 0; o < s.oc; ++o)
-      for (int oh = 0; oh < OH; ++oh)
-        for (int ow = 0; ow < OW; ++ow) {
-          double acc = bias ? bias[o] : 0.0;
-          for (int i = 0; i < s.ic; ++i)
-            for (int ky = 0; ky < s.kh; ++ky)
-              for (int kx = 0; kx < s.kw; ++kx) {
-                const int ih = oh * s.stride + ky - s.pad_h, iw = ow * s.stride + kx - s.pad_w;
-                if (ih < 0 || ih >= s.ih || iw < 0 || iw >= s.iw) continue;
-                const float xv = x[(((std::size_t(n) * ICB + i / kBlock) * s.ih + ih) * s.iw + iw) * kBlock + i % kBlock];
-                acc += bf(xv) * bf(w[((std::size_t(o) * s.ic + i) * s.kh + ky) * s.kw + kx]);
-              }
-          if (s.relu) acc = std::max(acc, 0.0);
-          y[(((std::size_t(n) * OCB + o / kBlock) * OH + oh) * OW + ow) * kBlock + o % kBlock] = float(acc);
-        }
+  const auto xr = rounded_to_bf16(x, std::size_t(s.n) * s.icb() * s.ih * s.iw * kBlock);
+  const auto wr = rounded_to_bf16(w, std::size_t(s.oc) * s.ic * s.kh * s.kw);
+  std::vector<float> wp(conv_weight_floats(s));
+  pack_conv_weights(s, wr.data(), ConvPack::fwd, wp.data());
+  conv_scalar.fwd(s, xr.data(), wp.data(), bias, y);
+}
+
+void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w, const float* bias, float* y) {
+  const ConvShape c = d.as_conv();  // the deconv is this conv's backward-data
+  const auto xr = rounded_to_bf16(x, std::size_t(d.n) * d.icb() * d.ih * d.iw * kBlock);
+  const auto wr = rounded_to_bf16(w, std::size_t(d.ic) * d.oc * d.kh * d.kw);
+  std::vector<float> wp(conv_weight_floats(c));
+  pack_conv_weights(c, wr.data(), ConvPack::bwd_data, wp.data());
+  conv_scalar.bwd_data(c, xr.data(), wp.data(), bias, y);
 }
 
 void conv_fwd_bf16_amx(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias, float* y) {
@@ -113,37 +113,19 @@ bool deconv2x2_bf16_applicable(const DeconvShape& d) {
 }
 
 std::size_t deconv2x2_bf16_weight_halves(const DeconvShape& d) {
-  const int ICB = (d.ic + kBlock - 1) / kBlock, OCB = (d.oc + kBlock - 1) / kBlock;
-  return std::size_t(4) * OCB * ((ICB + 1) / 2) * 512;
+  return std::size_t(4) * d.ocb() * bf16_pairs(d.icb()) * 512;
 }
 
 void pack_deconv2x2_bf16_weights(const DeconvShape& d, const float* w, std::uint16_t* out) {
   std::memset(out, 0, deconv2x2_bf16_weight_halves(d) * sizeof(std::uint16_t));
-  const int ICB = (d.ic + kBlock - 1) / kBlock, OCB = (d.oc + kBlock - 1) / kBlock, ICP = (ICB + 1) / 2;
+  const int OCB = d.ocb(), ICP = bf16_pairs(d.icb());
   for (int i = 0; i < d.ic; ++i)
     for (int o = 0; o < d.oc; ++o)
       for (int phase = 0; phase < 4; ++phase) {
         const int nb = phase * OCB + o / kBlock, n = o % kBlock, ip = i / 32, k = i % 32;
         const std::size_t tile = std::size_t(nb) * ICP + ip;
-        out[tile * 512 + (k / 2) * 32 + n * 2 + k % 2] = to_bf16(w[(std::size_t(i) * d.oc + o) * 4 + phase]);
+        out[tile * 512 + bf16_tile_index(k, n)] = to_bf16(w[(std::size_t(i) * d.oc + o) * 4 + phase]);
       }
-}
-
-void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w, const float* bias, float* y) {
-  const int ICB = (d.ic + kBlock - 1) / kBlock, OCB = (d.oc + kBlock - 1) / kBlock, OH = d.oh(), OW = d.ow();
-  std::memset(y, 0, std::size_t(d.n) * OCB * OH * OW * kBlock * sizeof(float));
-  auto bf = [](float v) { return double(from_bf16(to_bf16(v))); };
-  for (int n = 0; n < d.n; ++n)
-    for (int o = 0; o < d.oc; ++o)
-      for (int oh = 0; oh < OH; ++oh)
-        for (int ow = 0; ow < OW; ++ow) {
-          const int h = oh / 2, w_ = ow / 2, phase = (oh % 2) * 2 + ow % 2;
-          double acc = bias ? bias[o] : 0.0;
-          for (int i = 0; i < d.ic; ++i)
-            acc += bf(x[(((std::size_t(n) * ICB + i / kBlock) * d.ih + h) * d.iw + w_) * kBlock + i % kBlock]) *
-                   bf(w[(std::size_t(i) * d.oc + o) * 4 + phase]);
-          y[(((std::size_t(n) * OCB + o / kBlock) * OH + oh) * OW + ow) * kBlock + o % kBlock] = float(acc);
-        }
 }
 
 void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias, float* y) {

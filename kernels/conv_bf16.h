@@ -25,6 +25,12 @@
 
 namespace yelan::kernels {
 
+// Pairs of 16-channel input blocks: one 64-byte tile row is 32 channels of one pixel.
+inline int bf16_pairs(int icb) { return (icb + 1) / 2; }
+// Where input channel k (of its pair) and output channel n (of its block) sit in a 16 x 32
+// weight tile: row k/2 holds channels k and k+1 of all 16 outputs, interleaved.
+inline int bf16_tile_index(int k, int n) { return (k / 2) * 32 + n * 2 + k % 2; }
+
 // The CPU has AMX-TILE and AMX-BF16, the OS saves tile state, and this process was granted
 // it (Linux arch_prctl ARCH_REQ_XCOMP_PERM, asked once). False on every other build.
 bool amx_bf16_available();
@@ -45,7 +51,6 @@ std::size_t deconv2x2_bf16_weight_halves(const DeconvShape& d);
 void pack_deconv2x2_bf16_weights(const DeconvShape& d, const float* w_iohw, std::uint16_t* out);
 void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uint16_t* w_bf16, const float* bias,
                             float* y);
-void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w_iohw, const float* bias, float* y);
 
 // What conv_bf16_amx.cpp exports: its kernels behind a table, as the ISA variant files do.
 struct AmxBf16Kernels {
@@ -60,7 +65,8 @@ bool amx_bf16_enabled();
 // bf16 as AMX reads it: round to nearest even, subnormals to signed zero, NaN kept NaN.
 std::uint16_t to_bf16(float v);
 float from_bf16(std::uint16_t h);
-// The reference: the convolution of the bf16-rounded x and w (OIHW), summed in double.
+// The references: the scalar kernels (conv_scalar) on the bf16-rounded x and w.
 void conv_fwd_bf16_reference(const ConvShape& s, const float* x, const float* w_oihw, const float* bias, float* y);
+void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w_iohw, const float* bias, float* y);
 
 }  // namespace yelan::kernels

@@ -114,7 +114,7 @@ void fill_line(const ConvShape& s, const float* x, int n, int ip, std::ptrdiff_t
 // The tile loop over a convolution's geometry s (stride 1; for the transposed convolution
 // its 1x1 per phase, s.oc = 4 x its output channels in nb blocks), into o.
 void run_tiles(const ConvShape& s, int nblocks, const float* x, const std::uint16_t* w, Out o, std::ptrdiff_t y_image) {
-  const int ICP = (s.icb() + 1) / 2;
+  const int ICP = bf16_pairs(s.icb());
   const std::ptrdiff_t wp = s.iw + 2 * s.pad_w;
   const std::ptrdiff_t tasks_m = (std::ptrdiff_t(s.oh()) * wp + 31) / 32;  // 32 task rows each
   // The last task's rows read up to (kh-1) lines and kw-1 rows past its own.
@@ -173,7 +173,7 @@ void conv_tiles(const ConvShape& s, const float* x, const std::uint16_t* w, cons
 void deconv2x2_tiles(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias, float* y) {
   ConvShape s;  // the transposed convolution's 1x1 over its input, four phases of outputs
   s.n = d.n; s.ic = d.ic; s.ih = d.ih; s.iw = d.iw; s.kh = s.kw = 1;
-  const int OCB = (d.oc + kBlock - 1) / kBlock;
+  const int OCB = d.ocb();
   s.oc = 4 * OCB * kBlock;
   const Out o{y, bias, d.oh(), d.ow(), OCB, 0, 2, false};
   run_tiles(s, 4 * OCB, x, w, o, std::ptrdiff_t(OCB) * d.oh() * d.ow() * kBlock);

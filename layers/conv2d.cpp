@@ -25,15 +25,17 @@ bool& winograd_allowed() {
 }
 
 bool& bf16_convs() {
-  static bool on = false;
+  static thread_local bool on = false;  // a pipeline's precision, not its neighbour's on another thread
   return on;
 }
 
 // A 1x1 convolution is a copy into bf16 and a pass over the result as much as a product
 // (stage 1's 24->16 output layer: 0.25 against 0.15 ms in fp32), so it stays fp32.
-bool takes_bf16(const kernels::ConvShape& s) {
-  return bf16_convs() && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s) && kernels::amx_bf16_enabled();
-}
+bool bf16_active() { return bf16_convs() && kernels::amx_bf16_enabled(); }
+
+bool takes_bf16(const kernels::ConvShape& s) { return bf16_active() && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s); }
+
+bool takes_bf16(const kernels::DeconvShape& d) { return bf16_active() && kernels::deconv2x2_bf16_applicable(d); }
 
 std::vector<ConvRecord>*& conv_trace() {
   static std::vector<ConvRecord>* trace = nullptr;
@@ -90,8 +92,8 @@ void Conv2d::pack(const kernels::ConvShape& s) {
     dw_packed_ = Floats(n);
   }
   kernels::pack_conv_weights(s, weight.value.data(), kernels::ConvPack::fwd, fwd_.data());
-  up_bf16_.clear();
   kernels::pack_conv_weights(s, weight.value.data(), kernels::ConvPack::bwd_data, bwd_.data());
+  up_bf16_.clear();
   if (kernels::winograd_applicable(s) && !spec_.transposed) {
     wino_ = Floats(kernels::winograd_weight_floats(s));
     kernels::pack_winograd_weights(s, weight.value.data(), wino_.data());
@@ -144,8 +146,7 @@ void Conv2d::check_io(const Act& x, const Act& y) const {
 void Conv2d::forward(const Act& x, const Act& y, bool winograd) {
   check_io(x, y);
   pack(conv_shape(x));
-  if (spec_.transposed && !grad_enabled() && bf16_convs() && kernels::amx_bf16_enabled() &&
-      kernels::deconv2x2_bf16_applicable(deconv_shape(x))) {
+  if (spec_.transposed && !grad_enabled() && takes_bf16(deconv_shape(x))) {
     const kernels::DeconvShape d = deconv_shape(x);
     if (up_bf16_.empty()) {
       up_bf16_.resize(kernels::deconv2x2_bf16_weight_halves(d));
@@ -178,11 +179,7 @@ void Conv2d::pack_folded(const kernels::ConvShape& s, const float* scale, const 
   }
   fold_bias16_ = Floats(std::size_t((spec_.out + 15) / 16) * 16);
   for (int o = 0; o < spec_.out; ++o) fold_bias16_[o] = shift[o] + (bias ? scale[o] * bias->value[o] : 0.f);
-  fold_bf16_.clear();
-  if (!spec_.transposed && takes_bf16(s)) {  // packed when first asked for (forward_folded repacks then)
-    fold_bf16_.resize(kernels::conv_bf16_weight_halves(s));
-    kernels::pack_conv_bf16_weights(s, w.data(), fold_bf16_.data());
-  }
+  fold_bf16_.clear();  // packed from fold_w_ when first asked for
   folded_ = true;
 }
 
@@ -191,8 +188,13 @@ void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, cons
   check_io(x, y);
   kernels::ConvShape s = conv_shape(x);
   const bool bf16 = !spec_.transposed && takes_bf16(s);
-  if (bf16 && fold_bf16_.empty()) folded_ = false;  // folded before bf16 was asked for: fold again
   pack_folded(s, scale, shift);
+  if (bf16 && fold_bf16_.empty()) {
+    Floats w(weight.numel());
+    kernels::unpack_conv_weights(s, fold_w_.data(), w.data());
+    fold_bf16_.resize(kernels::conv_bf16_weight_halves(s));
+    kernels::pack_conv_bf16_weights(s, w.data(), fold_bf16_.data());
+  }
   if (bf16) {
     s.relu = relu;
     record(x, y, s);

@@ -28,8 +28,8 @@ bool& winograd_allowed();
 
 // Inference convolutions (forward_folded: an eval-mode ConvBn's) of stride 1 and kernel > 1x1
 // in bf16 on the CPU's AMX tiles (kernels/conv_bf16.h) where it has them; elsewhere, or off
-// (the default), fp32 as before. Process-wide; a network sets it for its own forward with
-// Bf16Convs (stage 1 under run.bf16).
+// (the default), fp32 as before. Set per thread (the caller's: the kernels' own threads never
+// read it); a network sets it for its own forward with Bf16Convs (stage 1 under run.bf16).
 bool& bf16_convs();
 class Bf16Convs {
  public:
@@ -41,8 +41,11 @@ class Bf16Convs {
  private:
   bool saved_;
 };
-// Whether a forward_folded of this shape takes the bf16 path now (bf16_convs, the CPU, the shape).
+// bf16_convs() on a CPU that runs the bf16 path (kernels::amx_bf16_enabled).
+bool bf16_active();
+// Whether a forward_folded of this shape takes the bf16 path now (bf16_active, the shape).
 bool takes_bf16(const kernels::ConvShape& s);
+bool takes_bf16(const kernels::DeconvShape& d);  // the 2x2/2 up-sampling, under NoGrad
 
 // One Conv2d forward as `yelan model summary` lists it: which layer (its weight, whose key
 // the caller's ParamList knows), the shapes in and out, and the multiply-add FLOPs.

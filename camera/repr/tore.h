@@ -24,18 +24,13 @@
 #include <vector>
 
 #include "camera/event.h"
+#include "camera/pixel_rect.h"
 
 namespace yelan::camera {
 
 struct ToreOptions {
   int k = 3;                          // FIFO depth per pixel and polarity, 1..64
   std::int64_t tau_us = 5'000'000;    // YeLan's horizon: ages >= tau read 0; 2..2^31-1
-};
-
-// A rectangle of pixels, [x0, x1) x [y0, y1).
-struct PixelRect {
-  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-  bool empty() const { return x1 <= x0 || y1 <= y0; }
 };
 
 struct BaldwinScale {

@@ -311,7 +311,7 @@ struct PosePipeline::Impl {
     vol_whole = false;
     const int d = nets.cfg.downscale;
     if (box) {
-      input::tore_input(tore, T, d, unmasked.act, 0, camera::PixelRect{box->x0, box->y0, box->x1, box->y1});
+      input::tore_input(tore, T, d, unmasked.act, 0, *box);
       ++stats.tore_box_ticks;
       stats.tore_box_area += frame_share(*box, unmasked.act);
       return;
@@ -372,13 +372,13 @@ struct PosePipeline::Impl {
     const layers::Act& a = frame.act;
     const PoseNet::CropBox& m = stage2_box(use);
     const auto clipped = [&](const PoseNet::CropBox& b) {
-      const PoseNet::CropBox c{std::max(b.x0, 0), std::max(b.y0, 0), std::min(b.x1, a.w), std::min(b.y1, a.h)};
+      const PoseNet::CropBox c = b.clipped(a.w, a.h);
       return c.empty() ? PoseNet::CropBox{} : c;
     };
     const PoseNet::CropBox old = clipped(frame_written), now = clipped(m);
     layers::zero_window(a, old.y0, old.x0, old.y1 - old.y0, old.x1 - old.x0);
     layers::copy_window(unmasked.act, now.y0, now.x0, a, now.y0, now.x0, now.y1 - now.y0, now.x1 - now.x0);
-    input::apply_mask(a, 0, stage2_mask(use), camera::PixelRect{now.x0, now.y0, now.x1, now.y1});
+    input::apply_mask(a, 0, stage2_mask(use), now);
     frame_written = now;
   }
 

@@ -261,3 +261,12 @@ TEST_CASE("TORE reset empties every slot, and bad options throw", "[tore]") {
   CHECK_THROWS_AS(ToreVolume(4, 4, {3, 1}), std::invalid_argument);
   CHECK_THROWS_AS(ToreVolume(4, 4, {3, std::int64_t{1} << 31}), std::invalid_argument);
 }
+
+TEST_CASE("PixelRect::clipped keeps the part inside the frame", "[tore]") {
+  const PixelRect in = PixelRect{-4, 3, 50, 17}.clipped(37, 23);
+  CHECK((in.x0 == 0 && in.y0 == 3 && in.x1 == 37 && in.y1 == 17));
+  CHECK((in.width() == 37 && in.height() == 14));
+  CHECK(PixelRect{-9, -9, -2, 5}.clipped(37, 23).empty());
+  CHECK(PixelRect{40, 0, 60, 5}.clipped(37, 23).empty());
+  CHECK(PixelRect{}.empty());
+}
