@@ -158,6 +158,7 @@ DATA_S43=${DATA_S43:-/var/tmp/yelan-data/sk-s43}
 DATA_MASK_MIX2=${DATA_MASK_MIX2:-/var/tmp/yelan-data/sk-mask-mix2}
 DATA_S45=${DATA_S45:-/var/tmp/yelan-data/sk-s45}
 DATA_MASK_MIX3=${DATA_MASK_MIX3:-/var/tmp/yelan-data/sk-mask-mix3}
+DATA_MASK_MIX4=${DATA_MASK_MIX4:-/var/tmp/yelan-data/sk-mask-mix4}
 STICK_CFG0=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json
 dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
@@ -697,6 +698,26 @@ case "$what" in
     CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX3/train BATCH=32 train mask mask-s46 \
       "${MASK_S46_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
       --seed 5 --init models/campaign/mask-s43/checkpoint.h5 ;;
+  # mask-s50 (fiftieth session): mask-s43 trained 600 steps more by its own recipe on its own
+  # training set, sk-mask-mix2 (lr 1e-4 cosine, windows drawn by seed 6): do more steps on the
+  # full set help, where fine-tunes on a part of it (mask-s45, mask-s46) lost IoU?
+  train-mask-s50)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX2/train BATCH=32 train mask mask-s50 \
+      "${MASK_S50_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
+      --seed 6 --init models/campaign/mask-s43/checkpoint.h5 ;;
+  # sk-mask-mix4 (fiftieth session): mask-s45 and mask-s46 forgot the rest on sk-s45 without
+  # all of sk-mask-mix2; here sk-s45's 402 (low light, flicker, sweeping cameras) beside all
+  # of sk-mask-mix2's 928 (hard links; data-s34, data-s43 and data-s45 first).
+  data-s50)
+    mkdir -p "$DATA_MASK_MIX4/train"
+    for f in "$DATA_MASK_MIX2"/train/*.yelan.h5; do ln -f "$f" "$DATA_MASK_MIX4/train/"; done
+    for f in "$DATA_S45"/train/*.yelan.h5; do ln -f "$f" "$DATA_MASK_MIX4/train/s5-${f##*/}"; done ;;
+  # mask-s51: mask-s50's recipe (mask-s43 + 600 steps, lr 1e-4 cosine) on sk-mask-mix4, windows
+  # drawn by seed 7: against mask-s50, what the hard conditions add when nothing is left out.
+  train-mask-s51)
+    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX4/train BATCH=32 train mask mask-s51 \
+      "${MASK_S51_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
+      --seed 7 --init models/campaign/mask-s43/checkpoint.h5 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;
