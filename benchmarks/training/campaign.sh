@@ -178,6 +178,14 @@ train() {
     > "$RUNS/$name.out" 2>&1
 }
 
+# mask_recipe NAME DIR STEPS SEED INIT: stage 1's fine-tune since mask-s43 (batch 32, one mask
+# frame, 15 windows a visit, mirrored, lr 1e-4 cosine) on DIR from INIT, windows drawn by SEED,
+# validated on sk-mask-mix's validation.
+mask_recipe() {
+  CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$2 BATCH=32 train mask "$1" "$3" \
+    --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip --seed "$4" --init "$5"
+}
+
 # masked_pose NAME STEPS INIT [flags]: stage 2 behind stage 1's masks (the true ones, or with
 # --mask-weights the frozen mask net's own) on ds-s7, fine-tuned from INIT.
 masked_pose() {
@@ -661,9 +669,7 @@ case "$what" in
   # mask-s43: mask-s36 trained 1000 steps more by its recipe on sk-mask-mix2 (lr 1e-4 cosine,
   # windows drawn by seed 3).
   train-mask-s43)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX2/train BATCH=32 train mask mask-s43 \
-      "${MASK_S43_STEPS:-1000}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
-      --seed 3 --init models/campaign/mask-s36/checkpoint.h5 ;;
+    mask_recipe mask-s43 "$DATA_MASK_MIX2/train" "${MASK_S43_STEPS:-1000}" 3 models/campaign/mask-s36/checkpoint.h5 ;;
   # sk-s45 (forty-fifth session): stage 1 fails in low light, under flicker and before a
   # sweeping camera (test split of seed 20261228: IoU 0.700 low, 0.665 flicker; 115 of 116
   # false "person" calls in two low-light furnished rooms with a sweeping camera). Seed 5 (no
@@ -680,9 +686,7 @@ case "$what" in
   # mask-s45: mask-s43 trained 600 steps more by its recipe on sk-s45 alone (lr 1e-4 cosine,
   # windows drawn by seed 4), validated on sk-mask-mix's validation as before.
   train-mask-s45)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_S45/train BATCH=32 train mask mask-s45 \
-      "${MASK_S45_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
-      --seed 4 --init models/campaign/mask-s43/checkpoint.h5 ;;
+    mask_recipe mask-s45 "$DATA_S45/train" "${MASK_S45_STEPS:-600}" 4 models/campaign/mask-s43/checkpoint.h5 ;;
   # sk-mask-mix3 (forty-sixth session): mask-s45 forgot the rest on sk-s45 alone, and
   # sk-mask-mix2's 928 take an hour and a half to remake, more than a session has beside its
   # training and CI: sk-neg's 128 training scenes (seed 3; about 17 min) made again, beside
@@ -695,16 +699,12 @@ case "$what" in
   # mask-s46: mask-s43 trained 600 steps by its recipe on sk-mask-mix3 (lr 1e-4 cosine, windows
   # drawn by seed 5), validated on sk-mask-mix's validation as before.
   train-mask-s46)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX3/train BATCH=32 train mask mask-s46 \
-      "${MASK_S46_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
-      --seed 5 --init models/campaign/mask-s43/checkpoint.h5 ;;
+    mask_recipe mask-s46 "$DATA_MASK_MIX3/train" "${MASK_S46_STEPS:-600}" 5 models/campaign/mask-s43/checkpoint.h5 ;;
   # mask-s50 (fiftieth session): mask-s43 trained 600 steps more by its own recipe on its own
   # training set, sk-mask-mix2 (lr 1e-4 cosine, windows drawn by seed 6): do more steps on the
   # full set help, where fine-tunes on a part of it (mask-s45, mask-s46) lost IoU?
   train-mask-s50)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX2/train BATCH=32 train mask mask-s50 \
-      "${MASK_S50_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
-      --seed 6 --init models/campaign/mask-s43/checkpoint.h5 ;;
+    mask_recipe mask-s50 "$DATA_MASK_MIX2/train" "${MASK_S50_STEPS:-600}" 6 models/campaign/mask-s43/checkpoint.h5 ;;
   # sk-mask-mix4 (fiftieth session): mask-s45 and mask-s46 forgot the rest on sk-s45 without
   # all of sk-mask-mix2; here sk-s45's 402 (low light, flicker, sweeping cameras) beside all
   # of sk-mask-mix2's 928 (hard links; data-s34, data-s43 and data-s45 first).
@@ -715,9 +715,7 @@ case "$what" in
   # mask-s51: mask-s50's recipe (mask-s43 + 600 steps, lr 1e-4 cosine) on sk-mask-mix4, windows
   # drawn by seed 7: against mask-s50, what the hard conditions add when nothing is left out.
   train-mask-s51)
-    CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$DATA_MASK_MIX4/train BATCH=32 train mask mask-s51 \
-      "${MASK_S51_STEPS:-600}" --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip \
-      --seed 7 --init models/campaign/mask-s43/checkpoint.h5 ;;
+    mask_recipe mask-s51 "$DATA_MASK_MIX4/train" "${MASK_S51_STEPS:-600}" 7 models/campaign/mask-s43/checkpoint.h5 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;
