@@ -37,13 +37,13 @@ void downscale_tore(const std::vector<float>& vol, int sensor_h, int sensor_w, i
     throw std::invalid_argument("TORE volume of " + std::to_string(vol.size()) + " values is not " + std::to_string(C) +
                                 " channels of " + std::to_string(sensor_w) + "x" + std::to_string(sensor_h));
   require_fills(C, sensor_w, sensor_h, a, d);
-  r = {std::max(r.x0, 0), std::max(r.y0, 0), std::min(r.x1, W), std::min(r.y1, H)};
+  r = r.clipped(W, H);
   if (r.empty()) return;
   const float inv = 1.f / float(d * d);
   // Row sums first (contiguous, vectorised), then one strided store per output value into
   // the 16-lane layout; the additions run in the plain (dy, dx) order, so the result is
   // bit-identical to summing each cell on its own.
-  const int rw = r.x1 - r.x0;
+  const int rw = r.width();
   std::vector<float> row(static_cast<std::size_t>(rw));
   for (int c = 0; c < C; ++c) {
     float* out = a.data + (std::size_t(n) * a.cb() + c / 16) * a.pixels() * 16 + c % 16;

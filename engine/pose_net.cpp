@@ -90,7 +90,7 @@ PoseNet::CropBox PoseNet::forward_cropped(const Act& x, CropBox box, int S) {
   box.x1 = std::min(W, (box.x1 + s - 1) / s * s);
   box.y1 = std::min(H, (box.y1 + s - 1) / s * s);
   if (!box.empty()) {
-    const int ch = box.y1 - box.y0, cw = box.x1 - box.x0;
+    const int ch = box.height(), cw = box.width();
     const Act in = crop_buf_.get(x.n, x.c, ch, cw);
     layers::copy_window(x, box.y0, box.x0, in, 0, 0, ch, cw);
     const Act f = head_forward(in);

@@ -325,8 +325,8 @@ struct PosePipeline::Impl {
 
   // The share of x's frame that b covers, clipped to the frame.
   static double frame_share(const PoseNet::CropBox& b, const layers::Act& x) {
-    const int w = std::min(b.x1, x.w) - std::max(b.x0, 0), h = std::min(b.y1, x.h) - std::max(b.y0, 0);
-    return w > 0 && h > 0 ? double(w) * h / (double(x.w) * x.h) : 0.0;
+    const PoseNet::CropBox c = b.clipped(x.w, x.h);
+    return c.empty() ? 0.0 : double(c.width()) * c.height() / (double(x.w) * x.h);
   }
 
   PoseNet::CropBox grown(PoseNet::CropBox b) const {
@@ -376,8 +376,8 @@ struct PosePipeline::Impl {
       return c.empty() ? PoseNet::CropBox{} : c;
     };
     const PoseNet::CropBox old = clipped(frame_written), now = clipped(m);
-    layers::zero_window(a, old.y0, old.x0, old.y1 - old.y0, old.x1 - old.x0);
-    layers::copy_window(unmasked.act, now.y0, now.x0, a, now.y0, now.x0, now.y1 - now.y0, now.x1 - now.x0);
+    layers::zero_window(a, old.y0, old.x0, old.height(), old.width());
+    layers::copy_window(unmasked.act, now.y0, now.x0, a, now.y0, now.x0, now.height(), now.width());
     input::apply_mask(a, 0, stage2_mask(use), now);
     frame_written = now;
   }
