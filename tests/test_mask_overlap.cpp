@@ -1,5 +1,5 @@
-// train::add_mask_overlap: the IoU at the net's size, and off the true outline's edge, counted
-// by hand on a shifted square with two false cells far from it.
+// train::add_mask_overlap: the IoU at the net's size, off the true outline's edge and at the
+// sensor's pixels, counted by hand on a shifted square with two false cells far from it.
 #include <catch2/catch.hpp>
 
 #include "engine/train/mask_overlap.h"
@@ -31,12 +31,18 @@ TEST_CASE("mask overlap: the IoU, and the IoU off the true outline's edge", "[tr
   CHECK(m.inter_off_edge == 1);
   CHECK(m.uni_off_edge == 3);
   CHECK(m.iou_off_edge() == Approx(1.0 / 3.0));
+  // At the sensor's pixels: 11 kept cells of 4 pixels each (0.3 > 0 keeps cell (0, 5)), 10
+  // true pixels, of which the six centres in columns 2-3 and the corner in cell (0, 5) are kept.
+  CHECK(m.inter_px == 7);
+  CHECK(m.uni_px == 44 + 10 - 7);
+  CHECK(m.iou_px() == Approx(7.0 / 47.0));
   // Counts add over frames, and a difference is one frame's share.
   MaskOverlap two = m;
   add_mask_overlap(two, truth.data(), sw, keep.data(), mh, mw, down);
   const MaskOverlap second = two - m;
   CHECK(second.inter == m.inter);
   CHECK(second.uni_off_edge == m.uni_off_edge);
+  CHECK(second.uni_px == m.uni_px);
   CHECK(two.iou() == Approx(m.iou()));
   // Nothing in either: no union, IoU 0 rather than a division by zero.
   MaskOverlap none;
@@ -46,4 +52,5 @@ TEST_CASE("mask overlap: the IoU, and the IoU off the true outline's edge", "[tr
   CHECK(none.uni == 0);
   CHECK(none.iou() == 0);
   CHECK(none.iou_off_edge() == 0);
+  CHECK(none.iou_px() == 0);
 }

@@ -1159,6 +1159,10 @@ TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for t
     // One dancer recording: every condition its name says pools the same ticks.
     REQUIRE(!r.mask_iou_by_condition.empty());
     for (const auto& [c, iou] : r.mask_iou_by_condition) CHECK(iou == Approx(r.mask_iou).margin(1e-12));
+    // At the sensor's pixels the same masks score within a few hundredths of the cells' IoU.
+    CHECK(r.mask_iou_px > 0);
+    CHECK(r.mask_iou_px == Approx(r.mask_iou).margin(0.1));
+    for (const auto& [c, iou] : r.mask_iou_px_by_condition) CHECK(iou == Approx(r.mask_iou_px).margin(1e-12));
     if (beta < 1) CHECK(r.mask_run_fraction < 1);
   }
   // The CLI's JSON carries it; simulated scenes have no true masks on disk to read: null.
@@ -1169,6 +1173,8 @@ TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for t
   CHECK(j.at("mask_iou").get<double>() > 0.2);
   CHECK(j.at("mask_ticks").get<int>() >= 15);
   CHECK(j.at("mask_iou_by_condition").size() >= 2);
+  CHECK(j.at("mask_iou_sensor_px").get<double>() > 0.2);
+  CHECK(j.at("mask_iou_sensor_px_by_condition").size() == j.at("mask_iou_by_condition").size());
   // Without early exit the CLI runs stage 1 on every tick: the sweep's IoU at beta 1.01.
   REQUIRE(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--run", "--seconds", "0.6", "--skip", "0.2", "--threads", "1",
                    "--no-early-exit", "--json", d / "every.json"})

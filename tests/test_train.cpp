@@ -694,4 +694,11 @@ TEST_CASE("train: eval --data says stage 1's IoU on the recordings with a dancer
   CHECK(yelan::test::contains(ev.out, "; off the true outline's edge "));
   REQUIRE(j.at("mask_iou_off_edge").is_number());
   CHECK(j.at("mask_iou_off_edge_by_condition").at("people").contains("dancer"));
+  // And at the sensor's pixels: the empty scene's mask is all false pixels there too.
+  CHECK(yelan::test::contains(ev.out, "; at the sensor's pixels "));
+  REQUIRE(j.at("mask_iou_sensor_px").is_number());
+  const auto& px = j.at("mask_iou_sensor_px_by_condition").at("people");
+  CHECK(px.at("nobody").get<double>() == 0);
+  CHECK(px.at("dancer").get<double>() > 0);
+  CHECK(j.at("mask_iou_sensor_px").get<double>() < px.at("dancer").get<double>());
 }

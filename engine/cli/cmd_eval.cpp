@@ -39,7 +39,9 @@ std::string presence_json(const std::map<std::string, run::PresenceReport::Condi
 std::string mask_iou_json(const run::StreamEvalResult& r) {
   nlohmann::ordered_json j = {{"mask_iou", r.mask_iou >= 0 ? nlohmann::ordered_json(r.mask_iou) : nlohmann::ordered_json(nullptr)},
                               {"mask_ticks", r.mask_ticks},
-                              {"mask_iou_by_condition", r.mask_iou_by_condition}};
+                              {"mask_iou_by_condition", r.mask_iou_by_condition},
+                              {"mask_iou_sensor_px", r.mask_iou_px >= 0 ? nlohmann::ordered_json(r.mask_iou_px) : nlohmann::ordered_json(nullptr)},
+                              {"mask_iou_sensor_px_by_condition", r.mask_iou_px_by_condition}};
   const std::string s = j.dump();
   return s.substr(1, s.size() - 2);  // the members, spliced into the object below
 }
@@ -112,6 +114,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
       << r.mask_iou << " over " << r.mask_ticks << " ticks of dancer " << (spec.recordings.empty() ? "scenes" : "recordings")
       << "; by condition:";
     for (const auto& [c, iou] : r.mask_iou_by_condition) t << " " << c << " " << iou;
+    t << "\nthe same at the sensor's pixels (each with its cell's verdict): " << r.mask_iou_px << "; by condition:";
+    for (const auto& [c, iou] : r.mask_iou_px_by_condition) t << " " << c << " " << iou;
     t << "\n";
   }
   if (!r.presence_by_condition.empty()) {

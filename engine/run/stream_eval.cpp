@@ -190,6 +190,8 @@ struct StreamScorer {
     if (r.mask_ticks) {
       r.mask_iou = overlap.iou();
       for (const auto& [c, o] : overlap_by_condition) r.mask_iou_by_condition[c] = o.iou();
+      r.mask_iou_px = overlap.iou_px();
+      for (const auto& [c, o] : overlap_by_condition) r.mask_iou_px_by_condition[c] = o.iou_px();
     }
     if (!depth_ratio.empty()) {
       r.depth_ratio_median = percentile(depth_ratio, 0.5);

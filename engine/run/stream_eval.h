@@ -94,6 +94,9 @@ struct StreamEvalResult {
   double mask_iou = -1;
   std::uint64_t mask_ticks = 0;
   std::map<std::string, double> mask_iou_by_condition;  // the condition words of the recordings' names
+  // The same at the sensor's pixels, each with its cell's verdict (train::MaskOverlap::iou_px).
+  double mask_iou_px = -1;
+  std::map<std::string, double> mask_iou_px_by_condition;
 };
 
 StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,

@@ -191,6 +191,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   const bool no_stage1 = spec.true_mask || !cfg.masked_input;
   res.mask_iou = no_stage1 ? -1 : overlap.iou();
   res.mask_iou_off_edge = no_stage1 ? -1 : overlap.iou_off_edge();
+  res.mask_iou_px = no_stage1 ? -1 : overlap.iou_px();
   for (const auto& [name, values] : cond)
     for (const auto& [value, m] : values)
       if (m.scores().frames > 0) res.by_condition[name][value] = m.scores();  // empty scenes score no frame
@@ -198,6 +199,7 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
     for (const auto& [value, iu] : values) {
       if (iu.uni > 0) res.mask_iou_by_condition[name][value] = iu.iou();
       if (iu.uni_off_edge > 0) res.mask_iou_off_edge_by_condition[name][value] = iu.iou_off_edge();
+      if (iu.uni_px > 0) res.mask_iou_px_by_condition[name][value] = iu.iou_px();
     }
   res.scenes = total;
   res.split = split.scores();
@@ -292,6 +294,8 @@ std::string eval_json(const EvalResult& r) {
   j["mask_iou_by_condition"] = by_condition(r.mask_iou_by_condition);
   j["mask_iou_off_edge"] = r.mask_iou_off_edge >= 0 ? nlohmann::ordered_json(r.mask_iou_off_edge) : nlohmann::ordered_json(nullptr);
   j["mask_iou_off_edge_by_condition"] = by_condition(r.mask_iou_off_edge_by_condition);
+  j["mask_iou_sensor_px"] = r.mask_iou_px >= 0 ? nlohmann::ordered_json(r.mask_iou_px) : nlohmann::ordered_json(nullptr);
+  j["mask_iou_sensor_px_by_condition"] = by_condition(r.mask_iou_px_by_condition);
   return j.dump(2) + "\n";
 }
 
@@ -311,6 +315,10 @@ std::string eval_table(const EvalResult& r) {
   if (r.mask_iou_off_edge >= 0) {
     o << "; off the true outline's edge " << std::to_string(r.mask_iou_off_edge).substr(0, 5);
     if (const auto p = r.mask_iou_off_edge_by_condition.find("people"); p != r.mask_iou_off_edge_by_condition.end())
+      if (const auto dn = p->second.find("dancer"); dn != p->second.end() && p->second.count("nobody"))
+        o << " (with a dancer: " << std::to_string(dn->second).substr(0, 5) << ")";
+    o << "; at the sensor's pixels " << std::to_string(r.mask_iou_px).substr(0, 5);
+    if (const auto p = r.mask_iou_px_by_condition.find("people"); p != r.mask_iou_px_by_condition.end())
       if (const auto dn = p->second.find("dancer"); dn != p->second.end() && p->second.count("nobody"))
         o << " (with a dancer: " << std::to_string(dn->second).substr(0, 5) << ")";
   }

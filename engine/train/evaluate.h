@@ -48,6 +48,10 @@ struct EvalResult {
   // cell either way at the outline is forgiven.
   double mask_iou_off_edge = 0;
   std::map<std::string, std::map<std::string, double>> mask_iou_off_edge_by_condition;
+  // The same at the sensor's pixels (each with its cell's verdict): free of where the centre
+  // sample falls in a cell.
+  double mask_iou_px = 0;
+  std::map<std::string, std::map<std::string, double>> mask_iou_px_by_condition;
   std::string config;
   std::uint64_t scenes = 0;
   std::map<std::string, PoseScores> floors;         // predictor name -> scores, same frames

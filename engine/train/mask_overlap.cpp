@@ -10,11 +10,14 @@ MaskOverlap& MaskOverlap::operator+=(const MaskOverlap& o) {
   uni += o.uni;
   inter_off_edge += o.inter_off_edge;
   uni_off_edge += o.uni_off_edge;
+  inter_px += o.inter_px;
+  uni_px += o.uni_px;
   return *this;
 }
 
 MaskOverlap MaskOverlap::operator-(const MaskOverlap& o) const {
-  return {inter - o.inter, uni - o.uni, inter_off_edge - o.inter_off_edge, uni_off_edge - o.uni_off_edge};
+  return {inter - o.inter, uni - o.uni, inter_off_edge - o.inter_off_edge, uni_off_edge - o.uni_off_edge,
+          inter_px - o.inter_px, uni_px - o.uni_px};
 }
 
 void add_mask_overlap(MaskOverlap& m, const std::uint8_t* truth, int sensor_w, const float* keep, int mask_h,
@@ -45,6 +48,15 @@ void add_mask_overlap(MaskOverlap& m, const std::uint8_t* truth, int sensor_w, c
         m.uni_off_edge += pr || tr;
       }
     }
+  for (int y = 0; y < mask_h * down; ++y) {
+    const float* cells = keep + std::size_t(y / down) * std::size_t(mask_w);
+    const std::uint8_t* row = truth + std::size_t(y) * std::size_t(sensor_w);
+    for (int x = 0; x < mask_w * down; ++x) {
+      const bool pr = cells[x / down] > 0, tr = row[x] != 0;
+      m.inter_px += pr && tr;
+      m.uni_px += pr || tr;
+    }
+  }
 }
 
 }  // namespace yelan::train
