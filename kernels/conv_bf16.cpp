@@ -6,19 +6,21 @@
 #include <stdexcept>
 #include <vector>
 
-#if defined(__x86_64__)
+// YELAN_AMX_BUILT: kernels/CMakeLists.txt compiled conv_bf16_amx.cpp (an x86-64 compiler
+// that takes -mamx-tile and -mamx-bf16); without it there is no AMX path to call.
+#if defined(YELAN_AMX_BUILT)
 #include <sys/syscall.h>
 #include <unistd.h>
 #endif
 
 namespace yelan::kernels {
 
-#if defined(__x86_64__)
+#if defined(YELAN_AMX_BUILT)
 extern const AmxBf16Kernels amx_bf16_kernels;  // conv_bf16_amx.cpp, compiled with AMX flags
 #endif
 
 bool amx_bf16_available() {
-#if defined(__x86_64__) && defined(__linux__)
+#if defined(YELAN_AMX_BUILT) && defined(__linux__)
   static const bool granted = [] {
     const CpuFeatures& f = cpu_features();
     if (!f.amx_tile || !f.amx_bf16 || !f.avx512bf16 || !f.avx512f || !f.avx512bw || !f.avx512vl) return false;
@@ -100,7 +102,7 @@ void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const fl
 void conv_fwd_bf16_amx(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias, float* y) {
   if (!conv_bf16_applicable(s)) throw std::invalid_argument("conv_fwd_bf16_amx: stride 1 convolutions only");
   if (!amx_bf16_available()) throw std::logic_error("conv_fwd_bf16_amx: this CPU or OS gives no AMX-BF16");
-#if defined(__x86_64__)
+#if defined(YELAN_AMX_BUILT)
   amx_bf16_kernels.conv(s, x, w, bias, y);
 #else
   (void)x; (void)w; (void)bias; (void)y;
@@ -132,7 +134,7 @@ void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uin
   if (!deconv2x2_bf16_applicable(d))
     throw std::invalid_argument("deconv2x2_fwd_bf16_amx: 2x2 stride-2 transposed convolutions without padding only");
   if (!amx_bf16_available()) throw std::logic_error("deconv2x2_fwd_bf16_amx: this CPU or OS gives no AMX-BF16");
-#if defined(__x86_64__)
+#if defined(YELAN_AMX_BUILT)
   amx_bf16_kernels.deconv2x2(d, x, w, bias, y);
 #else
   (void)x; (void)w; (void)bias; (void)y;
