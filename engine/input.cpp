@@ -87,18 +87,20 @@ void mask_cut(const layers::Act& logits, int n, int channel, std::vector<float>&
 }
 
 void mask_cut_all(const layers::Act& logits, int n, float cut, std::vector<std::vector<float>>& keep,
-                  std::vector<MaskExtent>& extent, int first) {
-  if (n < 0 || n >= logits.n || first < 0 || first > logits.c) throw std::invalid_argument("mask_cut_all: no such frame or channel");
+                  std::vector<MaskExtent>& extent, int first, int end) {
+  if (end < 0) end = logits.c;
+  if (n < 0 || n >= logits.n || first < 0 || end > logits.c || first > end)
+    throw std::invalid_argument("mask_cut_all: no such frame or channel");
   const float logit_cut = logit_of_cut(cut, "mask_cut_all");
   const std::size_t P = logits.pixels();
   keep.resize(std::size_t(logits.c));
   extent.assign(std::size_t(logits.c), MaskExtent{0, logits.w, logits.h, 0, 0});
   for (int c = 0; c < logits.c; ++c)
-    if (c < first) keep[std::size_t(c)].clear();
+    if (c < first || c >= end) keep[std::size_t(c)].clear();
     else keep[std::size_t(c)].assign(P, 0.f);
-  for (int cb = first / 16; cb < logits.cb(); ++cb) {
+  for (int cb = first / 16; cb < (end + 15) / 16; ++cb) {
     const float* p = logits.data + (std::size_t(n) * logits.cb() + cb) * P * 16;
-    const int lo = std::max(first - cb * 16, 0), hi = std::min(16, logits.c - cb * 16);
+    const int lo = std::max(first - cb * 16, 0), hi = std::min(16, end - cb * 16);
     const std::uint32_t lanes = ((1u << hi) - 1) & ~((1u << lo) - 1);  // the block's channels to cut
     for (int y = 0; y < logits.h; ++y)
       for (int x = 0; x < logits.w; ++x) {

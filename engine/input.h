@@ -42,9 +42,9 @@ struct MaskExtent {
 // mask_cut of channels first..C-1 of frame n at once, with each mask's extent: one pass over
 // the logits, whose 16 channels of a pixel share a cache line (mask_cut channel by channel
 // reads every line once per channel). keep and extent get C entries; those under `first`
-// are left empty.
+// and from `end` on (end < 0: C) are left empty.
 void mask_cut_all(const layers::Act& logits, int n, float cut, std::vector<std::vector<float>>& keep,
-                  std::vector<MaskExtent>& extent, int first = 0);
+                  std::vector<MaskExtent>& extent, int first = 0, int end = -1);
 
 // A binarised h x w mask (0 or 1 per pixel) grown by r pixels in every direction: a pixel is
 // kept when any pixel of the (2r + 1)-square around it is (a separable running maximum).

@@ -53,7 +53,7 @@ TEST_CASE("grow_mask: a pixel is kept when one within r of it (a square) was, on
   CHECK_THROWS_AS(yelan::input::grow_mask(one, 7, 9, -1), std::invalid_argument);
 }
 
-TEST_CASE("mask_cut_all: every channel's mask_cut, kept count and box in one pass", "[engine]") {
+TEST_CASE("mask_cut_all: every channel's mask_cut, kept count and box in one pass, over a range of channels", "[engine]") {
   // 21 channels: a full block and five of the next; the padding lanes hold large logits that
   // must never be read as masks. Channel 3 keeps nothing, channel 19 everything.
   yelan::layers::ActBuf buf;
@@ -68,17 +68,18 @@ TEST_CASE("mask_cut_all: every channel's mask_cut, kept count and box in one pas
           float& v = a.data[((std::size_t(n) * 2 + cb) * a.pixels() + i) * 16 + l];
           v = c >= 21 ? 10.f : c == 3 ? -20.f : c == 19 ? 20.f : logit(rng);
         }
-  for (const int first : {0, 1, 17})
+  // Channels first..end-1 (end -1: all 21; 4 ends inside the first block, 18 inside the second).
+  for (const auto& [first, end] : std::vector<std::pair<int, int>>{{0, -1}, {1, -1}, {17, -1}, {0, 4}, {1, 18}, {17, 18}, {5, 5}})
     for (const float cut : {0.1f, 0.5f}) {
-      INFO("first " << first << ", cut " << cut);
-      std::vector<std::vector<float>> keep;
+      INFO("first " << first << ", end " << end << ", cut " << cut);
+      std::vector<std::vector<float>> keep(25, std::vector<float>(3, 1.f));  // stale entries: replaced or cleared
       std::vector<yelan::input::MaskExtent> ext;
-      yelan::input::mask_cut_all(a, 1, cut, keep, ext, first);
+      yelan::input::mask_cut_all(a, 1, cut, keep, ext, first, end);
       REQUIRE(keep.size() == 21);
       REQUIRE(ext.size() == 21);
       for (int c = 0; c < 21; ++c) {
         INFO("channel " << c);
-        if (c < first) {
+        if (c < first || (end >= 0 && c >= end)) {
           CHECK(keep[std::size_t(c)].empty());
           CHECK(ext[std::size_t(c)].kept == 0);
           continue;
@@ -98,13 +99,15 @@ TEST_CASE("mask_cut_all: every channel's mask_cut, kept count and box in one pas
         CHECK((e.x0 == x0 && e.y0 == y0 && e.x1 == x1 && e.y1 == y1));
       }
       if (first <= 3) CHECK(ext[3].kept == 0);
-      CHECK(ext[19].kept == a.pixels());
+      CHECK(ext[19].kept == (first <= 19 && (end < 0 || end > 19) ? a.pixels() : 0));
     }
   std::vector<std::vector<float>> keep;
   std::vector<yelan::input::MaskExtent> ext;
   CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 2, 0.5f, keep, ext), std::invalid_argument);
   CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 1.f, keep, ext), std::invalid_argument);
   CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 0.5f, keep, ext, 22), std::invalid_argument);
+  CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 0.5f, keep, ext, 0, 22), std::invalid_argument);
+  CHECK_THROWS_AS(yelan::input::mask_cut_all(a, 0, 0.5f, keep, ext, 5, 4), std::invalid_argument);
 }
 
 TEST_CASE("mask_stage2_input: inside and outside the mask, the outside part within the grown box; bad shapes refused", "[engine]") {

@@ -719,6 +719,60 @@ TEST_CASE("run: streaming evaluation counts ticks, follows beta, and the paper p
   CHECK_FALSE(std::isnan(nobody.paper.mpjpe_mm));
 }
 
+TEST_CASE("run: under an age cap K only masks 0..K are binarised, and every pose is as with all of them", "[run]") {
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  yelan::test::CliTempDir d("run-cut-end");
+  REQUIRE(run_cli({"sim", "--preset", "ben-dance3-front-high-static", "--duration", "1s", "-o", d / "r.yelan.h5"}).code == 0);
+  struct Tick {
+    bool ran, person;
+    float confidence, mean_p, blob;
+    std::array<std::array<float, 3>, 13> joints;
+    std::vector<std::vector<float>> masks;  // stored after a run of stage 1
+  };
+  auto ticks = [&](bool every, int cap) {
+    yelan::run::RunOptions o;
+    o.cut_every_mask = every;
+    o.mask_max_age = cap;
+    o.stage1_cues = true;  // the cues of the mask in use, from its binarised pixels
+    yelan::run::PosePipeline pipe(w, 346, 260, o);
+    std::vector<Tick> out;
+    yelan::run::run_file(pipe, d / "r.yelan.h5", 1000000, [&](const yelan::run::Pose& p) {
+      out.push_back({p.mask_ran, p.person, p.confidence, p.mask_mean_p, p.mask_blob, p.joints_mm,
+                     p.mask_ran ? pipe.stored_masks() : std::vector<std::vector<float>>{}});
+    });
+    return out;
+  };
+  for (const int cap : {3, 0}) {
+    INFO("cap " << cap);
+    const auto some = ticks(false, cap), all = ticks(true, cap);
+    REQUIRE(some.size() >= 40);
+    REQUIRE(all.size() == some.size());
+    int runs = 0;
+    for (std::size_t i = 0; i < some.size(); ++i) {
+      INFO("tick " << i);
+      CHECK(some[i].ran == all[i].ran);
+      CHECK(some[i].person == all[i].person);
+      CHECK(some[i].confidence == all[i].confidence);
+      CHECK(some[i].mean_p == all[i].mean_p);
+      CHECK(some[i].blob == all[i].blob);
+      for (int j = 0; j < 13; ++j)
+        for (int k = 0; k < 3; ++k)
+          if (!std::isnan(all[i].joints[j][k])) CHECK(some[i].joints[j][k] == all[i].joints[j][k]);
+      if (!some[i].ran) continue;
+      ++runs;
+      REQUIRE(some[i].masks.size() == 16);
+      REQUIRE(all[i].masks.size() == 16);
+      for (std::size_t k = 0; k < 16; ++k) {
+        INFO("mask " << k);
+        CHECK(!all[i].masks[k].empty());
+        if (cap == 0 || k <= std::size_t(cap)) CHECK(some[i].masks[k] == all[i].masks[k]);
+        else CHECK(some[i].masks[k].empty());
+      }
+    }
+    CHECK(runs >= 3);
+  }
+}
+
 TEST_CASE("run: reading the TORE in stage 2's box alone between stage 1's runs changes no pose, and pictures still see the whole TORE", "[run]") {
   const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
   yelan::test::CliTempDir d("run-tore-box");

@@ -40,6 +40,7 @@ std::vector<BetaPoint> sweep_beta(const std::string& weights, const std::vector<
       const int W = tm.info.camera.width;
       RunOptions opt = options_for(tm, rate_hz, beta);
       opt.mask_cut = mask_cut;
+      opt.cut_every_mask = true;
       PosePipeline pipe(weights, W, tm.info.camera.height, opt);
       const int d = pipe.mask_downscale(), mw = W / d, mh = tm.info.camera.height / d;
       const auto score = [&](const Pose& p) {

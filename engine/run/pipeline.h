@@ -67,6 +67,9 @@ struct RunOptions {
   // Fill Pose::mask_mean_p and mask_blob (what calibrate's --ticks records; a flood fill and
   // a sigmoid per pixel of every mask stage 1 makes). Off, they stay 0.
   bool stage1_cues = false;
+  // Binarise every future mask stage 1 makes, not only those up to run.mask_max_age that early
+  // exit can reuse (bench early-exit scores each one's confidence against its true quality).
+  bool cut_every_mask = false;
 };
 
 // A tick's pose. Presence comes from stage 1: the share of the frame the mask in use covers,
