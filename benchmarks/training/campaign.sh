@@ -716,6 +716,11 @@ case "$what" in
   # drawn by seed 7: against mask-s50, what the hard conditions add when nothing is left out.
   train-mask-s51)
     mask_recipe mask-s51 "$DATA_MASK_MIX4/train" "${MASK_S51_STEPS:-600}" 7 models/campaign/mask-s43/checkpoint.h5 ;;
+  # mask-s52 (fifty-first session): mask-s51 (0.744 as deployed on the 56, the default 0.738)
+  # 600 steps more by the same recipe on the same sk-mask-mix4, windows drawn by seed 8: does a
+  # second round on the full set still gain? Needs train-mask-s51's final.h5 in $RUNS.
+  train-mask-s52)
+    mask_recipe mask-s52 "$DATA_MASK_MIX4/train" "${MASK_S52_STEPS:-600}" 8 "$RUNS/mask-s51/final.h5" ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;
@@ -923,6 +928,11 @@ case "$what" in
   ship-s49)
     "$Y" weights combine --mask models/campaign/mask-s43/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
       --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s49.json -o models/default.h5 ;;
+  # The default since the fifty-first session: stage 1 mask-s52 (train-mask-s51, then
+  # train-mask-s52) behind -s49's stage 2 and run settings, refitted (candidate.sh mask-s52).
+  ship-s51)
+    "$Y" weights combine --mask models/campaign/mask-s52/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
+      --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s51.json -o models/default.h5 ;;
   combine)
     "$Y" weights combine --mask "$RUNS/${MASK_RUN:-mask-s2}/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;
