@@ -721,6 +721,10 @@ case "$what" in
   # second round on the full set still gain? Needs train-mask-s51's final.h5 in $RUNS.
   train-mask-s52)
     mask_recipe mask-s52 "$DATA_MASK_MIX4/train" "${MASK_S52_STEPS:-600}" 8 "$RUNS/mask-s51/final.h5" ;;
+  # mask-s53 (started at the end of the fifty-first session): the shipped mask-s52, 600 steps
+  # more by the same recipe on sk-mask-mix4, windows drawn by seed 9.
+  train-mask-s53)
+    mask_recipe mask-s53 "$DATA_MASK_MIX4/train" "${MASK_S53_STEPS:-600}" 9 models/campaign/mask-s52/checkpoint.h5 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;
