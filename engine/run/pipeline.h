@@ -152,7 +152,8 @@ class PosePipeline {
   // (and, through its share of the frame, the "person" verdict).
   const std::vector<float>& last_stage1_mask() const;
   // Stage 1's latest run: its N masks (the current frame and N-1 future ones, 20 ms apart;
-  // binarised, the model's input size) and their scores.
+  // binarised, the model's input size) and their scores. Under an age cap K masks after K are
+  // left empty unless RunOptions::cut_every_mask is set.
   const std::vector<std::vector<float>>& stored_masks() const;
   const std::vector<float>& stored_scores() const;
   // Stage 1's latest run before the cut: its masks' logits at the model's input size (channel
