@@ -152,7 +152,7 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target_in, const f
 }
 
 MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std::vector<float>& dscores,
-                   const std::vector<float>& sample_weights, double dice_weight) {
+                   const std::vector<float>& sample_weights, double dice_weight, int focus) {
   const Act& m = net.masks();
   const int n = m.n, N = m.c;
   const std::size_t P = m.pixels();
@@ -164,6 +164,9 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
   for (int i = 0; i < n; ++i) total_w += weight(i);
   if (!(total_w > 0)) throw std::invalid_argument("mask loss: the sample weights sum to " + std::to_string(total_w));
   if (!(dice_weight >= 0)) throw std::invalid_argument("mask loss: the Dice weight must be >= 0");
+  if (focus < 0 || focus >= N)
+    throw std::invalid_argument("mask loss: focus " + std::to_string(focus) + " outside 0.." + std::to_string(N - 1) +
+                                " (the future masks of " + std::to_string(N) + ")");
   MaskLoss out;
   std::memset(dmasks.data, 0, dmasks.floats() * sizeof(float));
   const double n_first = total_w * P, n_all = total_w * N * P;
@@ -188,6 +191,9 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
           d[0] += s * y;
           d[1] += s;
           d[2] += y;
+        } else if (c <= focus) {
+          out.bce_focus += l / n_first;
+          g += wi * (s - y) / n_first;
         }
         dmasks.data[off + p * 16] = float(g);
         abs_sum += std::abs(s - y);
@@ -216,7 +222,7 @@ MaskLoss mask_loss(const MaskNet& net, const Act& labels, const Act& dmasks, std
       dmasks.data[off + p * 16] += float(dice_weight * share * d_s * s * (1 - s));
     }
   }
-  out.total = out.bce_first + out.bce_all + out.score_mse + dice_weight * out.dice;
+  out.total = out.bce_first + out.bce_focus + out.bce_all + out.score_mse + dice_weight * out.dice;
   return out;
 }
 

@@ -39,6 +39,7 @@ HpeLoss hpe_loss(const PoseNet& net, int stages, const float* target, const floa
 
 struct MaskLoss {
   double total = 0, bce_first = 0, bce_all = 0, score_mse = 0;
+  double bce_focus = 0;  // the mean per-pixel BCE of masks 1..focus, times focus (0 without focus)
   // Soft Dice loss of the current mask, 1 - (2 sum(p y) + 1) / (sum p + sum y + 1) per sample
   // (p the sigmoid; +1: a pixel's worth, so an empty label and an empty mask score 0),
   // weighted mean over the samples; always reported, in total only times dice_weight.
@@ -51,9 +52,12 @@ struct MaskLoss {
 // the unweighted one while some samples pull harder than others. dice_weight > 0 adds the
 // Dice term: the dancer covers a few percent of the frame, so per-pixel BCE is mostly the
 // background's, while Dice scores the overlap that the mask IoU measures.
+// focus K > 0: the future masks 1..K weigh as the current one does (a full per-pixel BCE term
+// each, in bce_focus), where otherwise each future mask is one N-th of bce_all: early exit
+// under an age cap K reuses masks 0..K-1 alone, so those are what the deployed IoU reads.
 MaskLoss mask_loss(const MaskNet& net, const layers::Act& labels, const layers::Act& dmasks,
                    std::vector<float>& dscores, const std::vector<float>& sample_weights = {},
-                   double dice_weight = 0);
+                   double dice_weight = 0, int focus = 0);
 
 // One weight per sample: `nobody` where the sample's current-frame label (channel 0) is
 // empty (a scene with nobody in the picture), 1 elsewhere. Stage 1's false alarms are whole

@@ -36,6 +36,28 @@ Scored score(MaskNet& net, const test::Owned& x, const test::Owned& labels, int 
   return s;
 }
 
+// Every stride-th real logit of m moved by +-0.01: the central difference of loss_of() (a
+// loss of m's current values) against the analytic gradient g.
+template <class LossOf>
+void check_gradient_by_differences(const layers::Act& m, const std::vector<float>& g, std::size_t stride, LossOf loss_of) {
+  double worst = 0, scale = 0;
+  for (std::size_t k = 0; k < g.size(); k += stride) {
+    if (int(k % 16) >= m.c) continue;
+    const float x0 = m.data[k];
+    m.data[k] = x0 + 0.01f;
+    const float xp = m.data[k];
+    const double lp = loss_of();
+    m.data[k] = x0 - 0.01f;
+    const float xm = m.data[k];
+    const double lm = loss_of();
+    m.data[k] = x0;
+    worst = std::max(worst, std::abs((lp - lm) / double(xp - xm) - double(g[k])));
+    scale = std::max(scale, std::abs(double(g[k])));
+  }
+  REQUIRE(scale > 0);
+  CHECK(worst < 1e-4 * scale);
+}
+
 // The tiny config with pose.depth_map.
 ModelConfig tiny_depth() {
   std::string text = load_model_config("tiny").json;
@@ -177,24 +199,66 @@ TEST_CASE("mask loss: the Dice term scores the current mask's overlap, its gradi
     const std::vector<float> w{0.5f, 2.f, 1.f};
     mask_loss(net, labels.act, dm.act, ds, w, 3.0);
     const std::vector<float> g(dm.act.data, dm.act.data + dm.act.floats());
-    double worst = 0, scale = 0;
-    for (std::size_t k = 0; k < g.size(); k += 7) {
-      if (int(k % 16) >= m.c) continue;
-      const float x0 = m.data[k];
-      m.data[k] = x0 + 0.01f;
-      const float xp = m.data[k];
-      const double lp = loss_of();
-      m.data[k] = x0 - 0.01f;
-      const float xm = m.data[k];
-      const double lm = loss_of();
-      m.data[k] = x0;
-      const double fd = (lp - lm) / double(xp - xm);
-      worst = std::max(worst, std::abs(fd - double(g[k])));
-      scale = std::max(scale, std::abs(double(g[k])));
-    }
-    REQUIRE(scale > 0);
-    CHECK(worst < 1e-4 * scale);
+    check_gradient_by_differences(m, g, 7, loss_of);
   }
+}
+
+TEST_CASE("mask loss: a focus K weighs future masks 1..K as the current one, gradient by finite differences",
+          "[train][losses]") {
+  const ModelConfig cfg = load_model_config("tiny");
+  REQUIRE(cfg.n_masks >= 4);
+  MaskNet net(cfg);
+  net.init(6);
+  net.set_training(false);
+  test::Owned x(2, cfg.channels, cfg.height(), cfg.width(), 9);
+  net.forward(x.act);
+  const layers::Act& m = net.masks();
+  const std::size_t per = m.floats() / 2, P = m.pixels();
+  test::Owned labels(m);
+  labels.for_each_real([&](std::size_t k) {
+    const std::size_t c = k % 16, p = (k % per) / 16;
+    labels.mem[k] = (p + 3 * c) % 23 < 8 ? 1.f : 0.f;  // a blob that moves from mask to mask
+  });
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-3.f, 3.f);
+  for (std::size_t k = 0; k < m.floats(); ++k)
+    if (int(k % 16) < m.c) m.data[k] = u(rng);
+  test::Owned dm(m);
+  std::vector<float> ds;
+  const MaskLoss plain = mask_loss(net, labels.act, dm.act, ds);
+  const std::vector<float> g0(dm.act.data, dm.act.data + dm.act.floats());
+  CHECK(plain.bce_focus == 0);
+  const MaskLoss zero = mask_loss(net, labels.act, dm.act, ds, {}, 0, 0);
+  CHECK(zero.total == plain.total);
+  CHECK(std::vector<float>(dm.act.data, dm.act.data + dm.act.floats()) == g0);
+
+  // Focus 2: the mean per-pixel BCE of masks 1 and 2 added, each as the current one's.
+  const MaskLoss two = mask_loss(net, labels.act, dm.act, ds, {}, 0, 2);
+  double want = 0;
+  for (std::size_t k = 0; k < m.floats(); ++k) {
+    const int c = int(k % 16);
+    if (c < 1 || c > 2) continue;
+    const double z = m.data[k], y = labels.mem[k];
+    want += (std::max(z, 0.0) - z * y + std::log1p(std::exp(-std::abs(z)))) / double(2 * P);
+  }
+  CHECK(two.bce_focus == Approx(want).epsilon(1e-9));
+  CHECK(two.total == Approx(plain.total + want).epsilon(1e-12));
+  CHECK(two.bce_first == plain.bce_first);
+  std::size_t moved_in = 0, moved_out = 0;
+  for (std::size_t k = 0; k < g0.size(); ++k)
+    if (dm.act.data[k] != g0[k]) ++((k % 16 == 1 || k % 16 == 2) ? moved_in : moved_out);
+  CHECK(moved_in == 2 * 2 * P);
+  CHECK(moved_out == 0);
+
+  // The gradient with focus 3, against central differences (scores' targets held fixed).
+  mask_loss(net, labels.act, dm.act, ds, {}, 0, 3);
+  const std::vector<float> g(dm.act.data, dm.act.data + dm.act.floats());
+  check_gradient_by_differences(m, g, 5, [&] {
+    const MaskLoss l = mask_loss(net, labels.act, dm.act, ds, {}, 0, 3);
+    return l.total - l.score_mse;
+  });
+  CHECK_THROWS_AS(mask_loss(net, labels.act, dm.act, ds, {}, 0, -1), std::invalid_argument);
+  CHECK_THROWS_AS(mask_loss(net, labels.act, dm.act, ds, {}, 0, m.c), std::invalid_argument);
 }
 
 TEST_CASE("pose loss: --swap-loss scores each window against its joints or the mirror labelling, whichever is nearer",

@@ -363,7 +363,7 @@ TEST_CASE("train: --mask-frames sets the mask stage's training windows, validati
   CHECK(zero.code == 2);
 }
 
-TEST_CASE("train: --dice-weight changes the mask stage's training loss, not its validation loss's formula", "[train][cli]") {
+TEST_CASE("train: --dice-weight and --mask-focus change the mask stage's training loss, not its validation loss's formula", "[train][cli]") {
   yelan::test::CliTempDir d("train-dice");
   auto run = [&](const std::string& out, std::vector<std::string> extra) {
     std::vector<std::string> v = {"train", "--stage", "mask", "--config", "micro", "--sim", "ben-dance3-front-high-static",
@@ -397,6 +397,21 @@ TEST_CASE("train: --dice-weight changes the mask stage's training loss, not its 
   CHECK(pose.code == 2);
   CHECK(yelan::test::contains(pose.err, "--dice-weight"));
   CHECK(run("neg", {"--dice-weight", "-1"}).code == 2);
+  // --mask-focus 2: masks 1 and 2 weigh as the current one, about 2 x ln 2 more for a net
+  // that has not learned; recorded, and a resume must keep it.
+  const auto focus = run("focus", {"--mask-focus", "2"});
+  INFO(focus.err);
+  REQUIRE(focus.code == 0);
+  CHECK(row("focus").first > row("plain").first + 0.5);
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "focus/run.json"), "\"mask_focus\": 2"));
+  const auto resumed = run("focus", {"--resume"});
+  CHECK(resumed.code == 2);
+  CHECK(yelan::test::contains(resumed.err, "--mask-focus 2"));
+  CHECK(run("far", {"--mask-focus", "99"}).code == 2);
+  const auto pose_focus = yelan::test::run_cli({"train", "--stage", "pose", "--config", "micro", "--sim", "ben-dance3-front-high-static",
+                                                "-o", d / "pf", "--steps", "1", "--mask-focus", "1"});
+  CHECK(pose_focus.code == 2);
+  CHECK(yelan::test::contains(pose_focus.err, "--mask-focus"));
 }
 
 TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bit-exactly, and eval --data scores them", "[train][cli]") {

@@ -178,12 +178,14 @@ train() {
     > "$RUNS/$name.out" 2>&1
 }
 
-# mask_recipe NAME DIR STEPS SEED INIT: stage 1's fine-tune since mask-s43 (batch 32, one mask
+# mask_recipe NAME DIR STEPS SEED INIT [FLAGS]: stage 1's fine-tune since mask-s43 (batch 32, one mask
 # frame, 15 windows a visit, mirrored, lr 1e-4 cosine) on DIR from INIT, windows drawn by SEED,
 # validated on sk-mask-mix's validation.
 mask_recipe() {
-  CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$2 BATCH=32 train mask "$1" "$3" \
-    --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip --seed "$4" --init "$5"
+  local name=$1 data=$2 steps=$3 seed=$4 init=$5
+  shift 5
+  CFG=benchmarks/configs/small-mask0.375-pose0.125.json DATA=$data BATCH=32 train mask "$name" "$steps" \
+    --val-data "$DATA_MASK_MIX/val" --lr 1e-4 --mask-frames 1 --windows-per-visit 15 --flip --seed "$seed" --init "$init" "$@"
 }
 
 # masked_pose NAME STEPS INIT [flags]: stage 2 behind stage 1's masks (the true ones, or with
@@ -725,6 +727,12 @@ case "$what" in
   # more by the same recipe on sk-mask-mix4, windows drawn by seed 9.
   train-mask-s53)
     mask_recipe mask-s53 "$DATA_MASK_MIX4/train" "${MASK_S53_STEPS:-600}" 9 models/campaign/mask-s52/checkpoint.h5 ;;
+  # mask-s54f (fifty-second session): mask-s53's run (mask-s52 + 600 steps, the same windows
+  # by seed 9) with future masks 1..3 weighing in the loss as the current one (--mask-focus 3):
+  # early exit under the age cap 3 reuses masks 0..2, which the plain loss weighs at a 16th
+  # each. mask-s53 lost IoU as deployed against mask-s52 (0.747 against 0.752).
+  train-mask-s54f)
+    mask_recipe mask-s54f "$DATA_MASK_MIX4/train" "${MASK_S54_STEPS:-600}" 9 models/campaign/mask-s52/checkpoint.h5 --mask-focus 3 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;

@@ -53,7 +53,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   const Args a("train", argv,
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
-                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight",
+                "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight", "--mask-focus",
                 "--windows-per-visit", "--mask-reuse"},
                {"--occlusion", "--warp", "--flip", "--frame-zoom", "--swap-loss", "--resume", "--quiet"});
   a.expect_positionals(0, 0);
@@ -145,6 +145,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   if (spec.empty_weight != 1 && spec.stage != "mask") throw UsageError("--empty-weight: for --stage mask only");
   spec.dice_weight = float(a.number_or("--dice-weight", 0, 0, 100));
   if (spec.dice_weight != 0 && spec.stage != "mask") throw UsageError("--dice-weight: for --stage mask only");
+  spec.mask_focus = a.int_value_or("--mask-focus", 0, 0, 1 << 10);
+  if (spec.mask_focus != 0 && spec.stage != "mask") throw UsageError("--mask-focus: for --stage mask only");
   spec.mask_weights = a.value_or("--mask-weights", "");
   spec.mask_reuse = a.int_value_or("--mask-reuse", 0, 0, spec.cfg.n_masks);
   if (spec.mask_reuse && (spec.stage != "pose" || spec.mask_weights.empty()))

@@ -350,7 +350,7 @@ int calibrate(const Args& a, std::ostream& out, std::ostream& err) {
   // Stage 1's cut first: presence is fitted on the share of the frame the cut mask covers.
   std::optional<double> cut;
   if (a.flag("--choose-mask-cut")) {
-    const std::vector<double> cuts = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6};
+    const std::vector<double> cuts = {0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8};
     err << "choosing stage 1's cut on the recordings with a dancer (stage 1 on every tick, its mask against the true mask):\n";
     out << std::defaultfloat << std::setprecision(3) << "mask cut sweep (IoU, stage 1 on every tick):";
     const std::vector<double> ious = run::sweep_mask_cuts(*w, recs, cuts, rate, seconds, skip, err);

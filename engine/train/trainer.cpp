@@ -224,6 +224,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (!(spec.empty_weight > 0)) throw std::invalid_argument("the empty-scene weight must be > 0");
   if (spec.dice_weight != 0 && pose_stage) throw std::invalid_argument("the Dice weight is for the mask stage");
   if (!(spec.dice_weight >= 0)) throw std::invalid_argument("the Dice weight must be >= 0");
+  if (spec.mask_focus != 0 && pose_stage) throw std::invalid_argument("the mask focus is for the mask stage");
+  if (spec.mask_focus < 0 || spec.mask_focus >= cfg.n_masks)
+    throw std::invalid_argument("the mask focus " + std::to_string(spec.mask_focus) + " is outside 0.." +
+                                std::to_string(cfg.n_masks - 1) + " (the config's future masks)");
   if (spec.windows_per_visit < 1) throw std::invalid_argument("windows per visit must be >= 1");
   if (spec.mask_reuse < 0 || spec.mask_reuse > spec.cfg.n_masks || (spec.mask_reuse > 0 && (!pose_stage || spec.mask_weights.empty())))
     throw std::invalid_argument("mask reuse: the pose stage behind a frozen mask net (mask weights) only, every 1.." +
@@ -241,6 +245,15 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   const std::string state_path = (fs::path(spec.out_dir) / "checkpoint.state").string();
   const std::string log_path = (fs::path(spec.out_dir) / "log.csv").string();
   const std::string run_json = (fs::path(spec.out_dir) / "run.json").string();
+  // Another loss is another run (run.json without the key: the option was off).
+  if (spec.resume && fs::exists(run_json)) {
+    std::ifstream in(run_json);
+    const auto j = nlohmann::json::parse(in, nullptr, false);
+    const int focus = !j.is_discarded() && j.contains("mask_focus") && j["mask_focus"].is_number_integer() ? j["mask_focus"].get<int>() : 0;
+    if (focus != spec.mask_focus)
+      throw std::invalid_argument(run_json + ": the run was trained with --mask-focus " + std::to_string(focus) + ", not " +
+                                  std::to_string(spec.mask_focus) + " (resume with the run's)");
+  }
   // A resumed run reads the recordings it started with, even if the dataset grew since.
   std::vector<std::string> train_files = spec.data, val_files = spec.val_data;
   if (spec.resume && !spec.data.empty() && fs::exists(run_json)) {
@@ -285,6 +298,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"swap_loss", spec.swap_loss},
                                       {"mask_reuse", spec.mask_reuse},
                                       {"empty_weight", spec.empty_weight}, {"dice_weight", spec.dice_weight},
+                                      {"mask_focus", spec.mask_focus},
                                       {"seed", spec.seed},
                                       {"mask_weights", spec.mask_weights}, {"init_weights", spec.init_weights},
                                       {"train_recordings", train_files.size()}, {"val_recordings", val_files.size()},
@@ -553,7 +567,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       std::vector<float> dscores;
       const std::vector<float> weights =
           spec.empty_weight == 1 ? std::vector<float>{} : nobody_weights(batch.labels.act, spec.empty_weight);
-      loss = mask_loss(mask, batch.labels.act, dmasks, dscores, weights, spec.dice_weight).total;
+      loss = mask_loss(mask, batch.labels.act, dmasks, dscores, weights, spec.dice_weight, spec.mask_focus).total;
       mask.backward(batch.input.act, dmasks, dscores.data());
     }
     if (!std::isfinite(loss))  // the last checkpoint stays as it was: this step's BN statistics may be NaN

@@ -66,6 +66,8 @@ struct TrainSpec {
                                     // the loss (nobody_weights); validation is never weighted
   float dice_weight = 0;            // mask stage: the soft Dice term's weight (mask_loss); the
                                     // validation loss leaves it out, comparable across runs
+  int mask_focus = 0;               // mask stage: future masks 1..K weigh as the current one
+                                    // (mask_loss's focus); validation leaves it out
   std::string mask_weights;         // pose stage: frozen mask net; empty: the true mask
   // pose stage behind mask_weights: > 0, each window masked as early exit in `yelan run`
   // masks it, stage 1 rerun every 1..mask_reuse frames (drawn per window, batch.h
