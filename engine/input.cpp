@@ -101,14 +101,13 @@ void mask_cut_all(const layers::Act& logits, int n, float cut, std::vector<std::
   for (int cb = first / 16; cb < (end + 15) / 16; ++cb) {
     const float* p = logits.data + (std::size_t(n) * logits.cb() + cb) * P * 16;
     const int lo = std::max(first - cb * 16, 0), hi = std::min(16, end - cb * 16);
-    const std::uint32_t lanes = ((1u << hi) - 1) & ~((1u << lo) - 1);  // the block's channels to cut
+    // Only the block's channels to cut are compared: under an age cap that is 2-4 of 16.
     for (int y = 0; y < logits.h; ++y)
       for (int x = 0; x < logits.w; ++x) {
         const std::size_t i = std::size_t(y) * logits.w + x;
-        std::uint32_t bits = 0;
-        for (int l = 0; l < 16; ++l) bits |= std::uint32_t(p[i * 16 + l] > logit_cut) << l;
-        for (bits &= lanes; bits; bits &= bits - 1) {
-          const int c = cb * 16 + __builtin_ctz(bits);
+        for (int l = lo; l < hi; ++l) {
+          if (!(p[i * 16 + l] > logit_cut)) continue;
+          const int c = cb * 16 + l;
           keep[std::size_t(c)][i] = 1.f;
           MaskExtent& e = extent[std::size_t(c)];
           ++e.kept;
