@@ -140,10 +140,15 @@ Act MaskNet::unet_top(const Act& in) {
     if (dy < 0 || dx < 0) throw std::logic_error("mask net: up-sampled map larger than its skip");
     pad_top_[k] = dy / 2;
     pad_left_[k] = dx / 2;
-    padded_[k] = padded_buf_[k].get(upt_[k].n, upt_[k].c, skip.h, skip.w);
-    pad_into(upt_[k], padded_[k], pad_top_[k], pad_left_[k]);
-    cat_[k] = cat_buf_[k].get(skip.n, skip.c + padded_[k].c, skip.h, skip.w);
-    layers::concat_channels(skip, padded_[k], cat_[k]);
+    cat_[k] = cat_buf_[k].get(skip.n, skip.c + upt_[k].c, skip.h, skip.w);
+    if (keep_padded_) {  // the cropped run's empty frame keeps the padded maps
+      padded_[k] = padded_buf_[k].get(upt_[k].n, upt_[k].c, skip.h, skip.w);
+      pad_into(upt_[k], padded_[k], pad_top_[k], pad_left_[k]);
+      layers::concat_channels(skip, padded_[k], cat_[k]);
+    } else {
+      padded_[k] = Act{nullptr, upt_[k].n, upt_[k].c, skip.h, skip.w};  // its shape, for backward's gradient
+      layers::concat_padded(skip, upt_[k], pad_top_[k], pad_left_[k], cat_[k]);
+    }
     y = upo_[k] = up_conv_[k]->forward(cat_[k]);
   }
   return y;

@@ -102,7 +102,10 @@ class MaskNet : public layers::Module<MaskNet> {
 
   // the last forward
   std::array<layers::Act, kLevels + 1> x_;  // inc output, down1..down4 outputs
+  // padded_: F.pad's maps, written only under keep_padded_ (prepare_zero_frame keeps them);
+  // otherwise concat_padded writes cat_ straight from upt_ and padded_ holds a shape alone.
   std::array<layers::Act, kLevels> pooled_, upt_, padded_, cat_, upo_;
+  bool keep_padded_ = false;
   std::array<int, kLevels> pad_top_{}, pad_left_{};
   layers::ActBuf pooled_buf_[kLevels], upt_buf_[kLevels], padded_buf_[kLevels], cat_buf_[kLevels];
   layers::ActBuf masks_buf_, top_gap_buf_, s1_buf_, gap_buf_;

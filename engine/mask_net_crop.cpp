@@ -43,7 +43,9 @@ void keep(const Act& a, layers::ActBuf& z, layers::ActBuf& c) {
 void MaskNet::prepare_zero_frame(int channels) {
   const Act z = win_a_.get(1, channels, cfg_.height(), cfg_.width());
   std::memset(z.data, 0, z.floats() * sizeof(float));
+  keep_padded_ = true;
   const Act top = unet_top(z);
+  keep_padded_ = false;
   for (int k = 0; k <= kLevels; ++k) keep(x_[k], zx_[k], cx_[k]);
   for (int k = 0; k < kLevels; ++k) {
     keep(padded_[k], zpad_[k], cpad_[k]);

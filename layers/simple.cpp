@@ -205,6 +205,41 @@ void concat_channels(const Act& a, const Act& b, const Act& y) {
   zero_padding(y);
 }
 
+void concat_padded(const Act& a, const Act& b, int top, int left, const Act& y) {
+  if (a.n != b.n || a.n != y.n || a.h != y.h || a.w != y.w || y.c != a.c + b.c || top < 0 || left < 0 ||
+      top + b.h > y.h || left + b.w > y.w)
+    throw std::invalid_argument("concat_padded: " + std::to_string(a.c) + "x" + std::to_string(a.h) + "x" + std::to_string(a.w) +
+                                " and " + std::to_string(b.c) + "x" + std::to_string(b.h) + "x" + std::to_string(b.w) + " at (" +
+                                std::to_string(top) + "," + std::to_string(left) + ") do not make " + std::to_string(y.c) + "x" +
+                                std::to_string(y.h) + "x" + std::to_string(y.w));
+  const std::size_t W = std::size_t(y.w);
+  for (int n = 0; n < a.n; ++n) {
+    copy_channels(a, n, 0, y, n, 0, a.c);
+    channel_runs(b, n, 0, y, n, a.c, b.c, true, [&](const float* s, float* d, int lanes) {
+      const auto zero = [lanes](float* p, std::size_t px) {
+        if (lanes == 16) std::memset(p, 0, px * 16 * sizeof(float));
+        else
+          for (std::size_t i = 0; i < px; ++i) std::fill_n(p + i * 16, lanes, 0.f);
+      };
+      for (int r = 0; r < y.h; ++r) {
+        float* row = d + std::size_t(r) * W * 16;
+        if (r < top || r >= top + b.h) {
+          zero(row, W);
+          continue;
+        }
+        const float* src = s + std::size_t(r - top) * std::size_t(b.w) * 16;
+        float* mid = row + std::size_t(left) * 16;
+        zero(row, std::size_t(left));
+        if (lanes == 16) std::memcpy(mid, src, std::size_t(b.w) * 16 * sizeof(float));
+        else
+          for (int x = 0; x < b.w; ++x) std::copy_n(src + std::size_t(x) * 16, lanes, mid + std::size_t(x) * 16);
+        zero(mid + std::size_t(b.w) * 16, W - std::size_t(left) - std::size_t(b.w));
+      }
+    });
+  }
+  zero_padding(y);
+}
+
 void split_channels(const Act& dy, const Act& da, const Act& db) {
   for (int n = 0; n < dy.n; ++n) {
     copy_channels(dy, n, 0, da, n, 0, da.c);

@@ -68,6 +68,9 @@ void zero_channels(const Act& a, int n, int c0, int count);
 
 // Channel concatenation [a, b] -> y and its backward split (any channel counts).
 void concat_channels(const Act& a, const Act& b, const Act& y);
+// [a, F.pad(b)] -> y in one pass: b's window at (top, left) of y's channels a.c.., zero around
+// it; a as large as y. The U-Net's up path, without the padded map written and read again.
+void concat_padded(const Act& a, const Act& b, int top, int left, const Act& y);
 void split_channels(const Act& dy, const Act& da, const Act& db);
 
 // y = a + b; dy passes unchanged to both inputs, so backward is a copy or an add.

@@ -341,6 +341,35 @@ TEST_CASE("copy_window moves a window between maps of any size, element by eleme
   CHECK_NOTHROW(copy_window(a.act, 1, 2, b.act, 0, 0, 4, 4));
 }
 
+TEST_CASE("concat_padded writes [a, F.pad(b)] element by element, padding lanes zero, over a dirty buffer", "[layers][simple]") {
+  struct Case { int n, ca, cb, h, w, bh, bw, top, left; };
+  for (const Case& k : {Case{1, 24, 24, 130, 173, 128, 172, 1, 0}, Case{2, 5, 7, 9, 11, 8, 10, 0, 1},
+                        Case{1, 16, 16, 5, 6, 4, 4, 1, 1}, Case{2, 20, 13, 7, 7, 7, 7, 0, 0}, Case{1, 48, 48, 17, 22, 16, 20, 0, 1}}) {
+    INFO(k.ca << " + " << k.cb << " channels, " << k.bh << "x" << k.bw << " at (" << k.top << "," << k.left << ") of " << k.h << "x" << k.w);
+    Owned a(k.n, k.ca, k.h, k.w, 41), b(k.n, k.cb, k.bh, k.bw, 42), y(k.n, k.ca + k.cb, k.h, k.w);
+    std::fill(y.mem.data(), y.mem.data() + y.mem.size(), 7.f);  // a reused buffer: nothing may survive
+    concat_padded(a.act, b.act, k.top, k.left, y.act);
+    auto at = [](const Owned& o, int n, int c, int yy, int x) {
+      return o.mem[((std::size_t(n) * o.act.cb() + c / 16) * o.act.h + yy) * o.act.w * 16 + std::size_t(x) * 16 + c % 16];
+    };
+    for (int n = 0; n < k.n; ++n)
+      for (int c = 0; c < y.act.cb() * 16; ++c)
+        for (int yy = 0; yy < k.h; ++yy)
+          for (int x = 0; x < k.w; ++x) {
+            float want = 0;
+            if (c < k.ca) want = at(a, n, c, yy, x);
+            else if (c < k.ca + k.cb && yy >= k.top && yy < k.top + k.bh && x >= k.left && x < k.left + k.bw)
+              want = at(b, n, c - k.ca, yy - k.top, x - k.left);
+            REQUIRE(at(y, n, c, yy, x) == want);
+          }
+  }
+  Owned a(1, 8, 5, 6), b(1, 8, 4, 4), y(1, 16, 5, 6), y2(1, 17, 5, 6);
+  CHECK_THROWS_AS(concat_padded(a.act, b.act, 2, 0, y.act), std::invalid_argument);   // b off y's bottom
+  CHECK_THROWS_AS(concat_padded(a.act, b.act, 0, -1, y.act), std::invalid_argument);
+  CHECK_THROWS_AS(concat_padded(a.act, b.act, 0, 0, y2.act), std::invalid_argument);  // the channels do not add up
+  CHECK_NOTHROW(concat_padded(a.act, b.act, 1, 2, y.act));
+}
+
 TEST_CASE("zero_window clears a window of every image and block, nothing else, and refuses one that does not fit", "[layers][simple]") {
   struct Case { int n, c, h, w, y, x, wh, ww; };
   for (const Case& k : {Case{1, 1, 1, 1, 0, 0, 1, 1}, Case{2, 17, 7, 9, 2, 1, 3, 5}, Case{1, 33, 5, 6, 0, 5, 5, 1},
