@@ -16,17 +16,6 @@ namespace {
 
 void zero(const Act& a) { std::memset(a.data, 0, a.floats() * sizeof(float)); }
 
-// Copies src into dst at (top, left) of every image; the rest of dst is zero (F.pad). Only
-// the border is cleared: the window is overwritten.
-void pad_into(const Act& src, const Act& dst, int top, int left) {
-  const int right = left + src.w, bottom = top + src.h;
-  layers::zero_window(dst, 0, 0, top, dst.w);
-  layers::zero_window(dst, bottom, 0, dst.h - bottom, dst.w);
-  layers::zero_window(dst, top, 0, src.h, left);
-  layers::zero_window(dst, top, right, src.h, dst.w - right);
-  layers::copy_window(src, 0, 0, dst, top, left, src.h, src.w);
-}
-
 // The adjoint: crops the window back out.
 void crop_from(const Act& big, const Act& small, int top, int left) {
   layers::copy_window(big, top, left, small, 0, 0, small.h, small.w);
@@ -141,14 +130,8 @@ Act MaskNet::unet_top(const Act& in) {
     pad_top_[k] = dy / 2;
     pad_left_[k] = dx / 2;
     cat_[k] = cat_buf_[k].get(skip.n, skip.c + upt_[k].c, skip.h, skip.w);
-    if (keep_padded_) {  // the cropped run's empty frame keeps the padded maps
-      padded_[k] = padded_buf_[k].get(upt_[k].n, upt_[k].c, skip.h, skip.w);
-      pad_into(upt_[k], padded_[k], pad_top_[k], pad_left_[k]);
-      layers::concat_channels(skip, padded_[k], cat_[k]);
-    } else {
-      padded_[k] = Act{nullptr, upt_[k].n, upt_[k].c, skip.h, skip.w};  // its shape, for backward's gradient
-      layers::concat_padded(skip, upt_[k], pad_top_[k], pad_left_[k], cat_[k]);
-    }
+    padded_[k] = Act{nullptr, upt_[k].n, upt_[k].c, skip.h, skip.w};
+    layers::concat_padded(skip, upt_[k], pad_top_[k], pad_left_[k], cat_[k]);
     y = upo_[k] = up_conv_[k]->forward(cat_[k]);
   }
   return y;

@@ -102,12 +102,11 @@ class MaskNet : public layers::Module<MaskNet> {
 
   // the last forward
   std::array<layers::Act, kLevels + 1> x_;  // inc output, down1..down4 outputs
-  // padded_: F.pad's maps, written only under keep_padded_ (prepare_zero_frame keeps them);
-  // otherwise concat_padded writes cat_ straight from upt_ and padded_ holds a shape alone.
+  // padded_: the shapes of F.pad's maps alone (no data): concat_padded writes cat_ straight
+  // from upt_; backward and the cropped run's empty frame make them from upt_ where needed.
   std::array<layers::Act, kLevels> pooled_, upt_, padded_, cat_, upo_;
-  bool keep_padded_ = false;
   std::array<int, kLevels> pad_top_{}, pad_left_{};
-  layers::ActBuf pooled_buf_[kLevels], upt_buf_[kLevels], padded_buf_[kLevels], cat_buf_[kLevels];
+  layers::ActBuf pooled_buf_[kLevels], upt_buf_[kLevels], cat_buf_[kLevels];
   layers::ActBuf masks_buf_, top_gap_buf_, s1_buf_, gap_buf_;
   layers::ActBuf pooled_in_buf_, pooled_masks_buf_, d_pooled_masks_;  // mask.pool > 1 only
   layers::Act pooled_in_, pooled_masks_;

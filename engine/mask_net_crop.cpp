@@ -43,12 +43,14 @@ void keep(const Act& a, layers::ActBuf& z, layers::ActBuf& c) {
 void MaskNet::prepare_zero_frame(int channels) {
   const Act z = win_a_.get(1, channels, cfg_.height(), cfg_.width());
   std::memset(z.data, 0, z.floats() * sizeof(float));
-  keep_padded_ = true;
   const Act top = unet_top(z);
-  keep_padded_ = false;
   for (int k = 0; k <= kLevels; ++k) keep(x_[k], zx_[k], cx_[k]);
   for (int k = 0; k < kLevels; ++k) {
-    keep(padded_[k], zpad_[k], cpad_[k]);
+    for (layers::ActBuf* buf : {&zpad_[k], &cpad_[k]}) {  // F.pad of the up-sampled map
+      const Act p = buf->like(padded_[k]);
+      std::memset(p.data, 0, p.floats() * sizeof(float));
+      layers::copy_window(upt_[k], 0, 0, p, pad_top_[k], pad_left_[k], upt_[k].h, upt_[k].w);
+    }
     keep(upo_[k], zup_[k], cup_[k]);
   }
   const Act m = win_out_.like(outc_.out_shape(top));

@@ -245,45 +245,44 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   const std::string state_path = (fs::path(spec.out_dir) / "checkpoint.state").string();
   const std::string log_path = (fs::path(spec.out_dir) / "log.csv").string();
   const std::string run_json = (fs::path(spec.out_dir) / "run.json").string();
-  // Another loss is another run (run.json without the key: the option was off).
+  // The run being resumed, as its run.json says (null: none, or not resuming).
+  nlohmann::json resumed;
   if (spec.resume && fs::exists(run_json)) {
     std::ifstream in(run_json);
-    const auto j = nlohmann::json::parse(in, nullptr, false);
-    const int focus = !j.is_discarded() && j.contains("mask_focus") && j["mask_focus"].is_number_integer() ? j["mask_focus"].get<int>() : 0;
-    if (focus != spec.mask_focus)
-      throw std::invalid_argument(run_json + ": the run was trained with --mask-focus " + std::to_string(focus) + ", not " +
-                                  std::to_string(spec.mask_focus) + " (resume with the run's)");
+    resumed = nlohmann::json::parse(in, nullptr, false);
+    if (resumed.is_discarded()) resumed = nullptr;
   }
+  // Another loss is another run (run.json without the key: the option was off).
+  const int focus = resumed.contains("mask_focus") && resumed["mask_focus"].is_number_integer() ? resumed["mask_focus"].get<int>() : 0;
+  if (!resumed.is_null() && focus != spec.mask_focus)
+    throw std::invalid_argument(run_json + ": the run was trained with --mask-focus " + std::to_string(focus) + ", not " +
+                                std::to_string(spec.mask_focus) + " (resume with the run's)");
   // A resumed run reads the recordings it started with, even if the dataset grew since.
   std::vector<std::string> train_files = spec.data, val_files = spec.val_data;
-  if (spec.resume && !spec.data.empty() && fs::exists(run_json)) {
-    std::ifstream in(run_json);
-    const auto j = nlohmann::json::parse(in, nullptr, false);
-    if (!j.is_discarded() && j.contains("train_files") && j["train_files"].is_array() && j.contains("val_files")) {
-      // Another number of windows per visit draws other windows: not the run being resumed.
-      const int wpv = j.contains("windows_per_visit") && j["windows_per_visit"].is_number_integer() ? j["windows_per_visit"].get<int>() : 8;
-      if (wpv != spec.windows_per_visit)
-        throw std::invalid_argument(run_json + ": the run read " + std::to_string(wpv) + " windows per visit, not " +
-                                    std::to_string(spec.windows_per_visit) + " (resume with --windows-per-visit " +
-                                    std::to_string(wpv) + ")");
-      // Nor does a run with other augmentations (run.json without a key: the option was off).
-      for (const auto& [key, on] : {std::pair<const char*, bool>{"occlusion", spec.occlusion}, {"warp", spec.warp}, {"flip", spec.flip},
-                                  {"frame_zoom", spec.frame_zoom}, {"swap_loss", spec.swap_loss}}) {
-        const bool was = j.contains(key) && j[key].is_boolean() && j[key].get<bool>();
-        if (was != on)
-          throw std::invalid_argument(run_json + ": the run was trained " + (was ? "with" : "without") + " --" + key +
-                                      " (resume " + (was ? "with" : "without") + " it)");
-      }
-      const int reuse = j.contains("mask_reuse") && j["mask_reuse"].is_number_integer() ? j["mask_reuse"].get<int>() : 0;
-      if (reuse != spec.mask_reuse)
-        throw std::invalid_argument(run_json + ": the run was trained with --mask-reuse " + std::to_string(reuse) + ", not " +
-                                    std::to_string(spec.mask_reuse) + " (resume with the run's)");
-      train_files = j["train_files"].get<std::vector<std::string>>();
-      val_files = j["val_files"].get<std::vector<std::string>>();
-      if (train_files.size() != spec.data.size() || val_files.size() != spec.val_data.size())
-        err << "resuming with the run's own " << train_files.size() << " training and " << val_files.size()
-            << " validation recordings (the folder now holds " << spec.data.size() << " and " << spec.val_data.size() << ")\n";
+  if (!spec.data.empty() && resumed.contains("train_files") && resumed["train_files"].is_array() && resumed.contains("val_files")) {
+    // Another number of windows per visit draws other windows: not the run being resumed.
+    const int wpv = resumed.contains("windows_per_visit") && resumed["windows_per_visit"].is_number_integer() ? resumed["windows_per_visit"].get<int>() : 8;
+    if (wpv != spec.windows_per_visit)
+      throw std::invalid_argument(run_json + ": the run read " + std::to_string(wpv) + " windows per visit, not " +
+                                  std::to_string(spec.windows_per_visit) + " (resume with --windows-per-visit " +
+                                  std::to_string(wpv) + ")");
+    // Nor does a run with other augmentations (run.json without a key: the option was off).
+    for (const auto& [key, on] : {std::pair<const char*, bool>{"occlusion", spec.occlusion}, {"warp", spec.warp}, {"flip", spec.flip},
+                                {"frame_zoom", spec.frame_zoom}, {"swap_loss", spec.swap_loss}}) {
+      const bool was = resumed.contains(key) && resumed[key].is_boolean() && resumed[key].get<bool>();
+      if (was != on)
+        throw std::invalid_argument(run_json + ": the run was trained " + (was ? "with" : "without") + " --" + key +
+                                    " (resume " + (was ? "with" : "without") + " it)");
     }
+    const int reuse = resumed.contains("mask_reuse") && resumed["mask_reuse"].is_number_integer() ? resumed["mask_reuse"].get<int>() : 0;
+    if (reuse != spec.mask_reuse)
+      throw std::invalid_argument(run_json + ": the run was trained with --mask-reuse " + std::to_string(reuse) + ", not " +
+                                  std::to_string(spec.mask_reuse) + " (resume with the run's)");
+    train_files = resumed["train_files"].get<std::vector<std::string>>();
+    val_files = resumed["val_files"].get<std::vector<std::string>>();
+    if (train_files.size() != spec.data.size() || val_files.size() != spec.val_data.size())
+      err << "resuming with the run's own " << train_files.size() << " training and " << val_files.size()
+          << " validation recordings (the folder now holds " << spec.data.size() << " and " << spec.val_data.size() << ")\n";
   }
   {
     // What the run is, for the curves and for anyone repeating it.
