@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "kernels/conv_bf16.h"
+#include "kernels/parallel.h"
 
 namespace yelan::kernels {
 namespace {
@@ -125,8 +126,7 @@ void run_tiles(const ConvShape& s, int nblocks, const float* x, const std::uint1
   const int tasks_o = (nblocks + 1) / 2;
   o.wp = wp;
   float* y0 = o.y;
-#pragma omp parallel
-  {
+  on_team([&] {
 #pragma omp for collapse(3) schedule(static)
     for (int n = 0; n < s.n; ++n)
       for (int ip = 0; ip < ICP; ++ip)
@@ -162,7 +162,7 @@ void run_tiles(const ConvShape& s, int nblocks, const float* x, const std::uint1
           }
         }
     _tile_release();
-  }
+  });
 }
 
 void conv_tiles(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias, float* y) {

@@ -37,6 +37,22 @@ constexpr int HALF_NV = kBlock / 2 / HALF_VL;
 typedef float vhalf __attribute__((vector_size(HALF_VL * 4)));
 typedef float vhalfu __attribute__((vector_size(HALF_VL * 4), aligned(4)));
 
+// Independent FMA chains a tile needs to keep the FMA units busy (latency 4 x two pipes on
+// the cores here). A tile with fewer accumulators than that (the border columns of a row, one
+// pixel each, and the remainders of short rows) splits each into P partial sums over the
+// source lanes, lane c into partial c % P, added up in order at the end: a one-pixel tile was
+// one chain, a quarter of the rate, and on the stage 2 maps of 22 columns its two border
+// columns took a third of each convolution.
+// The partials stay in registers: at most the register file less 4 (weights, broadcast).
+constexpr int kFmaChains = 8;
+constexpr int kVecRegs = VL == 8 ? 16 : 32;  // AVX2 16 ymm; AVX-512 32 zmm; NEON 32 q
+
+constexpr int partial_sums(int chains) {
+  const int want = chains >= kFmaChains ? 1 : (kFmaChains + chains - 1) / chains;
+  const int fit = (kVecRegs - 4) / chains;
+  return want < fit ? want : fit < 1 ? 1 : fit;
+}
+
 // R output pixels x NB output blocks, the last of them half when HALF: NQ full native
 // vectors and NH half ones per pixel.
 template <int R, int NB, bool HALF = false>
@@ -44,18 +60,23 @@ void tile(const TileArgs& a) {
   constexpr int NF = HALF ? NB - 1 : NB;  // full blocks
   constexpr int NQ = NF * CONV_NV;
   constexpr int NH = HALF ? HALF_NV : 0;
-  vf acc[R][NQ > 0 ? NQ : 1];
-  vhalf hacc[R][NH > 0 ? NH : 1];
+  constexpr int CHAINS = R * (NQ + NH);
+  constexpr int P = partial_sums(CHAINS);
+  vf acc[P][R][NQ > 0 ? NQ : 1];
+  vhalf hacc[P][R][NH > 0 ? NH : 1];
   const float* hb = a.bias ? a.bias + NF * kBlock : nullptr;
 #pragma GCC unroll 16
-  for (int r = 0; r < R; ++r) {
+  for (int p = 0; p < P; ++p)
 #pragma GCC unroll 16
-    for (int q = 0; q < NQ; ++q) acc[r][q] = a.bias ? loadf(a.bias + (q / CONV_NV) * kBlock + (q % CONV_NV) * VL) : vf{};
+    for (int r = 0; r < R; ++r) {
 #pragma GCC unroll 16
-    for (int q = 0; q < NH; ++q) hacc[r][q] = hb ? *reinterpret_cast<const vhalfu*>(hb + q * HALF_VL) : vhalf{};
-  }
-  // Source lane c of one tap: R broadcasts times NQ + NH weight vectors.
-  const auto lane = [&](const float* st, const float* wt, int c) __attribute__((always_inline)) {
+      for (int q = 0; q < NQ; ++q)
+        acc[p][r][q] = a.bias && p == 0 ? loadf(a.bias + (q / CONV_NV) * kBlock + (q % CONV_NV) * VL) : vf{};
+#pragma GCC unroll 16
+      for (int q = 0; q < NH; ++q) hacc[p][r][q] = hb && p == 0 ? *reinterpret_cast<const vhalfu*>(hb + q * HALF_VL) : vhalf{};
+    }
+  // Source lane c of one tap into partial p: R broadcasts times NQ + NH weight vectors.
+  const auto lane = [&](const float* st, const float* wt, int c, int p) __attribute__((always_inline)) {
     vf wv[NQ > 0 ? NQ : 1];
     vhalf hv[NH > 0 ? NH : 1];
 #pragma GCC unroll 16
@@ -66,9 +87,9 @@ void tile(const TileArgs& a) {
     for (int r = 0; r < R; ++r) {
       const float xv = st[r * a.src_r + c];
 #pragma GCC unroll 16
-      for (int q = 0; q < NQ; ++q) acc[r][q] += xv * wv[q];
+      for (int q = 0; q < NQ; ++q) acc[p][r][q] += xv * wv[q];
 #pragma GCC unroll 16
-      for (int q = 0; q < NH; ++q) hacc[r][q] += xv * hv[q];
+      for (int q = 0; q < NH; ++q) hacc[p][r][q] += xv * hv[q];
     }
   };
   for (int cb = 0; cb < a.ncb; ++cb) {
@@ -80,29 +101,45 @@ void tile(const TileArgs& a) {
       const float* wt = w + a.taps[t].w;
       if (lanes == kBlock) {
 #pragma GCC unroll 16
-        for (int c = 0; c < kBlock; ++c) lane(st, wt, c);
+        for (int c = 0; c < kBlock; ++c) lane(st, wt, c, c % P);
       } else {
-        for (int c = 0; c < lanes; ++c) lane(st, wt, c);
+        int c = 0;
+        for (; c + P <= lanes; c += P) {
+#pragma GCC unroll 16
+          for (int p = 0; p < P; ++p) lane(st, wt, c + p, p);
+        }
+#pragma GCC unroll 16
+        for (int p = 0; p < P; ++p)
+          if (c + p < lanes) lane(st, wt, c + p, p);
       }
     }
   }
+#pragma GCC unroll 16
+  for (int p = 1; p < P; ++p)
+#pragma GCC unroll 16
+    for (int r = 0; r < R; ++r) {
+#pragma GCC unroll 16
+      for (int q = 0; q < NQ; ++q) acc[0][r][q] += acc[p][r][q];
+#pragma GCC unroll 16
+      for (int q = 0; q < NH; ++q) hacc[0][r][q] += hacc[p][r][q];
+    }
   if (a.relu) {
 #pragma GCC unroll 16
     for (int r = 0; r < R; ++r) {
 #pragma GCC unroll 16
-      for (int q = 0; q < NQ; ++q) acc[r][q] = vmax(acc[r][q], vf{});
+      for (int q = 0; q < NQ; ++q) acc[0][r][q] = vmax(acc[0][r][q], vf{});
 #pragma GCC unroll 16
-      for (int q = 0; q < NH; ++q) hacc[r][q] = hacc[r][q] > vhalf{} ? hacc[r][q] : vhalf{};
+      for (int q = 0; q < NH; ++q) hacc[0][r][q] = hacc[0][r][q] > vhalf{} ? hacc[0][r][q] : vhalf{};
     }
   }
 #pragma GCC unroll 16
   for (int r = 0; r < R; ++r) {
 #pragma GCC unroll 16
-    for (int q = 0; q < NQ; ++q) storef(a.dst + r * a.dst_r + (q / CONV_NV) * a.dst_ob + (q % CONV_NV) * VL, acc[r][q]);
+    for (int q = 0; q < NQ; ++q) storef(a.dst + r * a.dst_r + (q / CONV_NV) * a.dst_ob + (q % CONV_NV) * VL, acc[0][r][q]);
     float* d = a.dst + r * a.dst_r + NF * a.dst_ob;
 #pragma GCC unroll 16
     for (int q = 0; q < NH; ++q) {
-      *reinterpret_cast<vhalfu*>(d + q * HALF_VL) = hacc[r][q];
+      *reinterpret_cast<vhalfu*>(d + q * HALF_VL) = hacc[0][r][q];
       *reinterpret_cast<vhalfu*>(d + kBlock / 2 + q * HALF_VL) = vhalf{};
     }
   }
@@ -208,41 +245,43 @@ void conv_fwd(const ConvShape& s, const float* x, const float* w, const float* b
   const std::ptrdiff_t w_tap = kBlock * kBlock, w_cb = std::ptrdiff_t(s.kh) * s.kw * w_tap;
   const std::ptrdiff_t w_ob = ICB * w_cb;
   const int groups = (OCB + CONV_NB - 1) / CONV_NB;
-#pragma omp parallel for collapse(3) schedule(static)
-  for (int n = 0; n < s.n; ++n)
-    for (int g = 0; g < groups; ++g)
-      for (int oh = 0; oh < OH; ++oh) {
-        const int ob0 = g * CONV_NB, nb = std::min(CONV_NB, OCB - ob0);
-        RowJob job;
-        job.T = OW;
-        job.src_w = s.iw;
-        job.mult = s.stride;
-        for (int kh = 0; kh < s.kh; ++kh) {
-          const int ih = oh * s.stride - s.pad_h + kh;
-          if (ih < 0 || ih >= s.ih) continue;
-          job.row_src[job.nrow] = std::ptrdiff_t(ih) * s.iw * kBlock;
-          job.row_w[job.nrow++] = kh * s.kw * w_tap;
+  on_team(worth_sharing(s.flops()), [&] {
+#pragma omp for collapse(3) schedule(static)
+    for (int n = 0; n < s.n; ++n)
+      for (int g = 0; g < groups; ++g)
+        for (int oh = 0; oh < OH; ++oh) {
+          const int ob0 = g * CONV_NB, nb = std::min(CONV_NB, OCB - ob0);
+          RowJob job;
+          job.T = OW;
+          job.src_w = s.iw;
+          job.mult = s.stride;
+          for (int kh = 0; kh < s.kh; ++kh) {
+            const int ih = oh * s.stride - s.pad_h + kh;
+            if (ih < 0 || ih >= s.ih) continue;
+            job.row_src[job.nrow] = std::ptrdiff_t(ih) * s.iw * kBlock;
+            job.row_w[job.nrow++] = kh * s.kw * w_tap;
+          }
+          job.ncol = s.kw;
+          for (int kw = 0; kw < s.kw; ++kw) {
+            job.col_base[kw] = kw - s.pad_w;
+            job.col_w[kw] = kw * w_tap;
+          }
+          TileArgs a;
+          a.src = x + std::ptrdiff_t(n) * ICB * x_plane;
+          a.src_cb = x_plane;
+          a.w = w + ob0 * w_ob;
+          a.w_cb = w_cb;
+          a.w_ob = w_ob;
+          a.ncb = ICB;
+          a.last_lanes = s.ic - (ICB - 1) * kBlock;
+          a.dst = y + (std::ptrdiff_t(n) * OCB + ob0) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
+          a.dst_r = kBlock;
+          a.dst_ob = y_plane;
+          a.bias = bias ? bias + ob0 * kBlock : nullptr;
+          a.relu = s.relu;
+          run_row(job, a, nb, ob0 + nb == OCB && s.oc - (OCB - 1) * kBlock <= kBlock / 2);
         }
-        job.ncol = s.kw;
-        for (int kw = 0; kw < s.kw; ++kw) {
-          job.col_base[kw] = kw - s.pad_w;
-          job.col_w[kw] = kw * w_tap;
-        }
-        TileArgs a;
-        a.src = x + std::ptrdiff_t(n) * ICB * x_plane;
-        a.src_cb = x_plane;
-        a.w = w + ob0 * w_ob;
-        a.w_cb = w_cb;
-        a.w_ob = w_ob;
-        a.ncb = ICB;
-        a.last_lanes = s.ic - (ICB - 1) * kBlock;
-        a.dst = y + (std::ptrdiff_t(n) * OCB + ob0) * y_plane + std::ptrdiff_t(oh) * OW * kBlock;
-        a.dst_r = kBlock;
-        a.dst_ob = y_plane;
-        a.bias = bias ? bias + ob0 * kBlock : nullptr;
-        a.relu = s.relu;
-        run_row(job, a, nb, ob0 + nb == OCB && s.oc - (OCB - 1) * kBlock <= kBlock / 2);
-      }
+  });
 }
 
 // dx[ih][iw] gathers dy[oh][ow] through tap (kh, kw) when ih = oh*s - pad_h + kh, likewise
@@ -255,45 +294,47 @@ void conv_bwd_data(const ConvShape& s, const float* dy, const float* w, const fl
   const std::ptrdiff_t w_tap = kBlock * kBlock, w_cb = std::ptrdiff_t(s.kh) * s.kw * w_tap;
   const std::ptrdiff_t w_ob = OCB * w_cb;  // bwd layout: [ICB][OCB][KH][KW][16 oc][16 ic]
   const int groups = (ICB + CONV_NB - 1) / CONV_NB;
-#pragma omp parallel for collapse(3) schedule(static)
-  for (int n = 0; n < s.n; ++n)
-    for (int g = 0; g < groups; ++g)
-      for (int ih = 0; ih < s.ih; ++ih) {
-        const int cb0 = g * CONV_NB, nb = std::min(CONV_NB, ICB - cb0);
-        RowJob base;
-        base.src_w = OW;
-        base.mult = 1;
-        for (int kh = 0; kh < s.kh; ++kh) {
-          const int num = ih + s.pad_h - kh;
-          if (num < 0 || num % st != 0 || num / st >= OH) continue;
-          base.row_src[base.nrow] = std::ptrdiff_t(num / st) * OW * kBlock;
-          base.row_w[base.nrow++] = kh * s.kw * w_tap;
-        }
-        TileArgs a;
-        a.src_cb = y_plane;
-        a.w = w + cb0 * w_ob;
-        a.w_cb = w_cb;
-        a.w_ob = w_ob;
-        a.ncb = OCB;
-        a.last_lanes = s.oc - (OCB - 1) * kBlock;
-        a.dst_r = std::ptrdiff_t(st) * kBlock;
-        a.dst_ob = x_plane;
-        a.bias = bias ? bias + cb0 * kBlock : nullptr;  // a transposed convolution's
-        for (int phase = 0; phase < st && phase < s.iw; ++phase) {
-          RowJob job = base;
-          job.T = (s.iw - phase + st - 1) / st;
-          for (int kw = 0; kw < s.kw; ++kw) {
-            const int num = phase + s.pad_w - kw;  // ow = num / st + t when num % st == 0
-            if (((num % st) + st) % st != 0) continue;
-            job.col_base[job.ncol] = floor_div(num, st);
-            job.col_w[job.ncol++] = kw * w_tap;
+  on_team(worth_sharing(s.flops()), [&] {  // also a transposed convolution's forward
+#pragma omp for collapse(3) schedule(static)
+    for (int n = 0; n < s.n; ++n)
+      for (int g = 0; g < groups; ++g)
+        for (int ih = 0; ih < s.ih; ++ih) {
+          const int cb0 = g * CONV_NB, nb = std::min(CONV_NB, ICB - cb0);
+          RowJob base;
+          base.src_w = OW;
+          base.mult = 1;
+          for (int kh = 0; kh < s.kh; ++kh) {
+            const int num = ih + s.pad_h - kh;
+            if (num < 0 || num % st != 0 || num / st >= OH) continue;
+            base.row_src[base.nrow] = std::ptrdiff_t(num / st) * OW * kBlock;
+            base.row_w[base.nrow++] = kh * s.kw * w_tap;
           }
-          if (job.nrow == 0) job.ncol = 0;
-          a.src = dy + std::ptrdiff_t(n) * OCB * y_plane;
-          a.dst = dx + (std::ptrdiff_t(n) * ICB + cb0) * x_plane + (std::ptrdiff_t(ih) * s.iw + phase) * kBlock;
-          run_row(job, a, nb, cb0 + nb == ICB && s.ic - (ICB - 1) * kBlock <= kBlock / 2);
+          TileArgs a;
+          a.src_cb = y_plane;
+          a.w = w + cb0 * w_ob;
+          a.w_cb = w_cb;
+          a.w_ob = w_ob;
+          a.ncb = OCB;
+          a.last_lanes = s.oc - (OCB - 1) * kBlock;
+          a.dst_r = std::ptrdiff_t(st) * kBlock;
+          a.dst_ob = x_plane;
+          a.bias = bias ? bias + cb0 * kBlock : nullptr;  // a transposed convolution's
+          for (int phase = 0; phase < st && phase < s.iw; ++phase) {
+            RowJob job = base;
+            job.T = (s.iw - phase + st - 1) / st;
+            for (int kw = 0; kw < s.kw; ++kw) {
+              const int num = phase + s.pad_w - kw;  // ow = num / st + t when num % st == 0
+              if (((num % st) + st) % st != 0) continue;
+              job.col_base[job.ncol] = floor_div(num, st);
+              job.col_w[job.ncol++] = kw * w_tap;
+            }
+            if (job.nrow == 0) job.ncol = 0;
+            a.src = dy + std::ptrdiff_t(n) * OCB * y_plane;
+            a.dst = dx + (std::ptrdiff_t(n) * ICB + cb0) * x_plane + (std::ptrdiff_t(ih) * s.iw + phase) * kBlock;
+            run_row(job, a, nb, cb0 + nb == ICB && s.ic - (ICB - 1) * kBlock <= kBlock / 2);
+          }
         }
-      }
+  });
 }
 
 // dw[ob][cb][kh][kw][ci][:] = sum over n, oh, ow of x[n][cb][ih][iw][ci] * dy[n][ob][oh][ow][:].
@@ -331,8 +372,7 @@ void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float
   const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock;
   const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
   const std::ptrdiff_t w_tap = kBlock * kBlock;
-#pragma omp parallel
-  {
+  on_team([&] {
 #pragma omp for collapse(3) schedule(dynamic)
     for (int ob = 0; ob < OCB; ++ob)
       for (int cb = 0; cb < ICB; ++cb)
@@ -373,5 +413,5 @@ void conv_bwd_weights(const ConvShape& s, const float* x, const float* dy, float
         for (int l = 0; l < kBlock; ++l) dbias[ob * kBlock + l] = float(total[l]);
       }
     }
-  }
+  });
 }

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "kernels/conv.h"
+#include "kernels/parallel.h"
 #include "kernels/simd.h"
 
 namespace yelan::kernels::YELAN_VARIANT_ISA {

@@ -32,8 +32,7 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
   const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock, y_plane = std::ptrdiff_t(OH) * OW * kBlock;
   const std::ptrdiff_t cs = std::ptrdiff_t(kWinoChunk) * kBlock;  // one channel block of one product
   const bool half_last = s.oc - (OCB - 1) * kBlock <= kBlock / 2;  // see tile
-#pragma omp parallel
-  {
+  on_team(worth_sharing(s.flops() / 4), [&] {  // a quarter of the multiplies
     // V: [36][ICB][chunk][16] transformed inputs, M: [36][OCB][chunk][16] products
     float* V = thread_scratch(std::size_t(36) * (ICB + OCB) * cs);
     float* M = V + std::size_t(36) * ICB * cs;
@@ -131,5 +130,5 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
           }
         }
       }
-  }
+  });
 }

@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "kernels/heatmap.h"
+#include "kernels/parallel.h"
 #include "kernels/simd.h"
 
 namespace yelan::kernels::YELAN_VARIANT_ISA {
@@ -14,34 +15,38 @@ namespace {
 constexpr int NQ = 16 / VL;
 
 void simd_softmax_fwd(int planes, std::size_t pixels, const float* x, float* y) {
-#pragma omp parallel for schedule(static)
-  for (int p = 0; p < planes; ++p)
-    for (int q = 0; q < NQ; ++q) {
-      const float* xp = x + std::size_t(p) * pixels * 16 + q * VL;
-      float* yp = y + std::size_t(p) * pixels * 16 + q * VL;
-      vf m = loadf(xp);
-      for (std::size_t i = 1; i < pixels; ++i) m = vmax(m, loadf(xp + i * 16));
-      vf sum{};
-      for (std::size_t i = 0; i < pixels; ++i) {
-        const vf e = vexp(loadf(xp + i * 16) - m);
-        storef(yp + i * 16, e);
-        sum += e;
+  on_team(worth_sharing_floats(std::size_t(planes) * pixels * 16), [&] {
+#pragma omp for schedule(static)
+    for (int p = 0; p < planes; ++p)
+      for (int q = 0; q < NQ; ++q) {
+        const float* xp = x + std::size_t(p) * pixels * 16 + q * VL;
+        float* yp = y + std::size_t(p) * pixels * 16 + q * VL;
+        vf m = loadf(xp);
+        for (std::size_t i = 1; i < pixels; ++i) m = vmax(m, loadf(xp + i * 16));
+        vf sum{};
+        for (std::size_t i = 0; i < pixels; ++i) {
+          const vf e = vexp(loadf(xp + i * 16) - m);
+          storef(yp + i * 16, e);
+          sum += e;
+        }
+        const vf inv = splat(1.f) / sum;
+        for (std::size_t i = 0; i < pixels; ++i) storef(yp + i * 16, loadf(yp + i * 16) * inv);
       }
-      const vf inv = splat(1.f) / sum;
-      for (std::size_t i = 0; i < pixels; ++i) storef(yp + i * 16, loadf(yp + i * 16) * inv);
-    }
+  });
 }
 
 void simd_softmax_bwd(int planes, std::size_t pixels, const float* y, const float* dy, float* dx) {
-#pragma omp parallel for schedule(static)
-  for (int p = 0; p < planes; ++p)
-    for (int q = 0; q < NQ; ++q) {
-      const std::size_t base = std::size_t(p) * pixels * 16 + q * VL;
-      vf dot{};
-      for (std::size_t i = 0; i < pixels; ++i) dot += loadf(y + base + i * 16) * loadf(dy + base + i * 16);
-      for (std::size_t i = 0; i < pixels; ++i)
-        storef(dx + base + i * 16, loadf(y + base + i * 16) * (loadf(dy + base + i * 16) - dot));
-    }
+  on_team([&] {
+#pragma omp for schedule(static)
+    for (int p = 0; p < planes; ++p)
+      for (int q = 0; q < NQ; ++q) {
+        const std::size_t base = std::size_t(p) * pixels * 16 + q * VL;
+        vf dot{};
+        for (std::size_t i = 0; i < pixels; ++i) dot += loadf(y + base + i * 16) * loadf(dy + base + i * 16);
+        for (std::size_t i = 0; i < pixels; ++i)
+          storef(dx + base + i * 16, loadf(y + base + i * 16) * (loadf(dy + base + i * 16) - dot));
+      }
+  });
 }
 
 void simd_dsnt_fwd(int planes, int h, int w, const float* y, float* out) {

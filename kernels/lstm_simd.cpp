@@ -6,6 +6,7 @@
 #include <cstdint>
 
 #include "kernels/lstm.h"
+#include "kernels/parallel.h"
 #include "kernels/simd.h"
 
 namespace yelan::kernels::YELAN_VARIANT_ISA {
@@ -16,10 +17,12 @@ namespace {
 template <class Body>
 void for_each_chunk(const LstmShape& s, std::size_t E, Body&& body) {
   const std::ptrdiff_t chunks = std::ptrdiff_t((E + 1023) / 1024);
-#pragma omp parallel for collapse(2) schedule(static)
-  for (int n = 0; n < s.n; ++n)
-    for (std::ptrdiff_t ch = 0; ch < chunks; ++ch)
-      body(n, std::size_t(ch) * 1024, std::min(E, std::size_t(ch + 1) * 1024));
+  on_team(worth_sharing_floats(std::size_t(s.n) * E), [&] {
+#pragma omp for collapse(2) schedule(static)
+    for (int n = 0; n < s.n; ++n)
+      for (std::ptrdiff_t ch = 0; ch < chunks; ++ch)
+        body(n, std::size_t(ch) * 1024, std::min(E, std::size_t(ch + 1) * 1024));
+  });
 }
 
 void simd_lstm_fwd(const LstmShape& s, const float* gates, const float* c_prev, float* act, float* c, float* h,

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "camera/repr/tore_kernels.h"
+#include "kernels/parallel.h"
 
 namespace yelan::camera {
 namespace {
@@ -47,7 +48,7 @@ void scatter_planes(const float* buf, int n, int channels, std::size_t plane, fl
 
 // Runs `kernel` over the FIFO in row chunks that fit a stack buffer and scatters each
 // chunk from the FIFO's pixel-major order to the output's channel-major planes.
-// Rows are independent, so `threads` > 1 splits them with OpenMP.
+// Rows are independent, so `threads` > 1 splits them with OpenMP (kernels/parallel.h).
 // Only the pixels of `rect` (already clipped to the sensor) are read and written.
 template <class Kernel>
 void readout_planes(const std::vector<std::int64_t>& fifo, int width, int height, int k,
@@ -56,16 +57,18 @@ void readout_planes(const std::vector<std::int64_t>& fifo, int width, int height
   const int channels = 2 * k;
   const int chunk = std::max(1, kBuffer / channels);
   const std::size_t plane = std::size_t(width) * height;
-#pragma omp parallel for num_threads(threads) schedule(static) if (threads > 1)
-  for (int y = rect.y0; y < rect.y1; ++y) {
-    float buf[kBuffer];
-    for (int x0 = rect.x0; x0 < rect.x1; x0 += chunk) {
-      const int n = std::min(chunk, rect.x1 - x0);
-      kernel(fifo.data() + (std::size_t(y) * width + x0) * channels, std::size_t(n) * channels,
-             params, buf);
-      scatter_planes(buf, n, channels, plane, out + std::size_t(y) * width + x0);
+  kernels::on_threads(threads, [&] {
+#pragma omp for schedule(static)
+    for (int y = rect.y0; y < rect.y1; ++y) {
+      float buf[kBuffer];
+      for (int x0 = rect.x0; x0 < rect.x1; x0 += chunk) {
+        const int n = std::min(chunk, rect.x1 - x0);
+        kernel(fifo.data() + (std::size_t(y) * width + x0) * channels, std::size_t(n) * channels,
+               params, buf);
+        scatter_planes(buf, n, channels, plane, out + std::size_t(y) * width + x0);
+      }
     }
-  }
+  });
 }
 
 }  // namespace

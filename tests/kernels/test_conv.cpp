@@ -1,5 +1,7 @@
 #include <catch2/catch.hpp>
 
+#include <omp.h>
+
 #include <cmath>
 
 #include "conv_reference.h"
@@ -351,4 +353,52 @@ TEST_CASE("a fused ReLU stores exactly max(0, y) of the same forward, direct and
       }
     }
   }
+}
+
+TEST_CASE("conv kernels give the same bits on one thread, on two, and called from each thread of a parallel region", "[kernels][conv][threads]") {
+  // kernels/parallel.h: on one thread the loops run without a parallel region; inside an
+  // enclosing region they must still open their own (a loop left orphaned there would be
+  // shared among the caller's team, and each caller would fill only its share of the output).
+  const int saved = omp_get_max_threads();
+  // Small shapes run on the caller alone (worth_sharing); the large ones are shared.
+  for (const Case& c : {Case{1, 8, 17, 22, 8, 3, 1, 1}, Case{2, 17, 33, 44, 13, 3, 2, 1}, Case{1, 40, 40, 50, 40, 3, 1, 1},
+                        Case{2, 24, 45, 61, 20, 3, 2, 1}}) {
+    const ConvShape s = shape_of(c);
+    const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 71);
+    const auto w = random_floats(std::size_t(s.oc) * s.ic * s.kh * s.kw, 72);
+    const auto dy = random_floats(std::size_t(s.n) * s.oc * s.oh() * s.ow(), 73);
+    for (Isa isa : yelan::test::supported_isas()) {
+      const ConvKernels& k = conv_kernels(isa);
+      INFO("isa " << isa_name(isa) << " ic" << c.ic << " " << c.ih << "x" << c.iw << " oc" << c.oc << " s" << c.stride);
+      omp_set_num_threads(1);
+      const Run one = run_kernels(k, s, x, w, {}, dy);
+      omp_set_num_threads(2);
+      const Run two = run_kernels(k, s, x, w, {}, dy);
+      CHECK(two.y == one.y);
+      CHECK(two.dx == one.dx);
+      CHECK(two.dw == one.dw);
+      Run each[2];
+#pragma omp parallel num_threads(2)
+      each[omp_get_thread_num()] = run_kernels(k, s, x, w, {}, dy);
+      for (const Run& r : each) {
+        CHECK(r.y == one.y);
+        CHECK(r.dx == one.dx);
+        CHECK(r.dw == one.dw);
+      }
+      if (winograd_applicable(s)) {
+        std::vector<float> u(winograd_weight_floats(s));
+        pack_winograd_weights(s, w.data(), u.data());
+        const auto xb = to_blocked(x, s.n, s.ic, s.ih, s.iw);
+        const std::size_t ny = std::size_t(s.n) * s.ocb() * s.oh() * s.ow() * kBlock;
+        std::vector<float> y1(ny, -3.f), y2[2] = {std::vector<float>(ny, -3.f), std::vector<float>(ny, -3.f)};
+        omp_set_num_threads(1);
+        k.fwd_winograd(s, xb.data(), u.data(), nullptr, y1.data());
+#pragma omp parallel num_threads(2)
+        k.fwd_winograd(s, xb.data(), u.data(), nullptr, y2[omp_get_thread_num()].data());
+        CHECK(y2[0] == y1);
+        CHECK(y2[1] == y1);
+      }
+    }
+  }
+  omp_set_num_threads(saved);
 }
