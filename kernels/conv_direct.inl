@@ -37,13 +37,12 @@ constexpr int HALF_NV = kBlock / 2 / HALF_VL;
 typedef float vhalf __attribute__((vector_size(HALF_VL * 4)));
 typedef float vhalfu __attribute__((vector_size(HALF_VL * 4), aligned(4)));
 
-// Independent FMA chains a tile needs to keep the FMA units busy (latency 4 x two pipes on
-// the cores here). A tile with fewer accumulators than that (the border columns of a row, one
-// pixel each, and the remainders of short rows) splits each into P partial sums over the
-// source lanes, lane c into partial c % P, added up in order at the end: a one-pixel tile was
-// one chain, a quarter of the rate, and on the stage 2 maps of 22 columns its two border
-// columns took a third of each convolution.
-// The partials stay in registers: at most the register file less 4 (weights, broadcast).
+// A tile needs 8 independent FMA chains to keep two FMA pipes of latency 4 busy. One with
+// fewer accumulators (a row's border columns, one pixel each; the remainders of short rows;
+// a 16-channel layer's 6 pixels) splits each into P partial sums over the source lanes, lane
+// c into partial c % P, added in order at the end, as many as fit the register file less 4
+// (weights, broadcast). A one-pixel tile was one chain, a quarter of the rate: on stage 2's
+// 22-column maps its two border columns took 18% of a residual block's time.
 constexpr int kFmaChains = 8;
 constexpr int kVecRegs = VL == 8 ? 16 : 32;  // AVX2 16 ymm; AVX-512 32 zmm; NEON 32 q
 

@@ -222,7 +222,11 @@ TEST_CASE("widening the pose net keeps its joints and heatmaps and leaves the ne
       b.net.weights_changed();
     }
     test::Owned x(6, narrow.channels, narrow.height(), narrow.width(), 7);
-    check_same_outputs(a, b, [&](Pose& p) { return pose_outputs(p, x.act); }, 0.01, 5e-5);
+    // 2e-4: in training mode BatchNorm over 6 images divides rounding by small batch spreads,
+    // and the two widths' convolutions add their terms in different orders (the narrow net's
+    // 8-channel layers split their sums into more partials: kernels/conv_direct.inl); a
+    // misplaced weight moves the outputs by their own size.
+    check_same_outputs(a, b, [&](Pose& p) { return pose_outputs(p, x.act); }, 0.01, 2e-4);
     // The gates' conv: [4 x 20 gates] x [24 features | 20 hidden]; old gate g, channel 3 sits
     // at row g * 20 + 3, the old hidden channel 5 at column 24 + 5; the new features 16..23 and
     // the new hidden 12..19 read into old gates are zero.
