@@ -20,29 +20,12 @@ constexpr std::size_t kShareMinFloats = 1u << 18;  // memory-bound passes: float
 inline bool worth_sharing(double flops) { return flops >= kShareMinFlops; }
 inline bool worth_sharing_floats(std::size_t floats) { return floats >= kShareMinFloats; }
 
-// on_team(share, body): body's `#pragma omp for` loops are orphaned worksharing constructs.
-// When more than one thread is in force and the work is worth sharing, body runs inside a
-// parallel region and they share its iterations; otherwise body is called directly and they
-// run every iteration on the caller (an orphaned `omp for` outside a region binds to a team
-// of one: no library round trip). Inside an enclosing parallel region a region is still
-// opened, as a bare `omp parallel` would be there (a nested team of one unless nesting is
-// on): a loop is never shared with the caller's team.
-template <class Body>
-inline void on_team(bool share, Body&& body) {
-  if ((share && omp_get_max_threads() > 1) || omp_in_parallel()) {
-#pragma omp parallel
-    body();
-  } else {
-    body();
-  }
-}
-
-template <class Body>
-inline void on_team(Body&& body) {
-  on_team(true, body);
-}
-
-// The same for a loop that names its thread count (num_threads(threads)).
+// on_threads(threads, body): body's `#pragma omp for` loops are orphaned worksharing
+// constructs. With more than one thread asked, body runs inside a parallel region of that
+// many and they share its iterations; with one, body is called directly and they run every
+// iteration on the caller (an orphaned `omp for` outside a region binds to a team of one: no
+// library round trip). Inside an enclosing parallel region a region is still opened (a
+// nested team, of one unless nesting is on): a loop is never shared with the caller's team.
 template <class Body>
 inline void on_threads(int threads, Body&& body) {
   if (threads > 1 || omp_in_parallel()) {
@@ -51,6 +34,17 @@ inline void on_threads(int threads, Body&& body) {
   } else {
     body();
   }
+}
+
+// The same on the threads in force where the work is worth sharing (share), else on one.
+template <class Body>
+inline void on_team(bool share, Body&& body) {
+  on_threads(share ? omp_get_max_threads() : 1, body);
+}
+
+template <class Body>
+inline void on_team(Body&& body) {
+  on_threads(omp_get_max_threads(), body);
 }
 
 }  // namespace
