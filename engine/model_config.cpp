@@ -101,6 +101,8 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     else c.mask_mirror = get_bool_or(r, where + ".run", "mask_mirror", false);
     c.run_bf16 = get_bool_or(r, where + ".run", "bf16", false);
     if (r.contains("mask_max_age_bf16")) c.mask_max_age_bf16 = get_int(r, where + ".run", "mask_max_age_bf16");
+    if (r.contains("mask_max_age_bf16_winograd"))
+      c.mask_max_age_bf16_winograd = get_int(r, where + ".run", "mask_max_age_bf16_winograd");
     if (r.contains("depth_tau_s")) c.depth_tau_s = get_num(r, where + ".run", "depth_tau_s");
     if (r.contains("pose_tau_s")) c.pose_tau_s = get_num(r, where + ".run", "pose_tau_s");
     if (r.contains("mask_cut")) c.mask_cut = get_num(r, where + ".run", "mask_cut");
@@ -133,6 +135,8 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
       {c.mask_max_age >= 0 && c.mask_max_age <= 1000, "run.mask_max_age must lie in 0..1000 (frames of 20 ms; 0: none)"},
       {c.mask_max_age_bf16.value_or(0) >= 0 && c.mask_max_age_bf16.value_or(0) <= 1000,
        "run.mask_max_age_bf16 must lie in 0..1000 (frames of 20 ms; 0: none)"},
+      {c.mask_max_age_bf16_winograd.value_or(0) >= 0 && c.mask_max_age_bf16_winograd.value_or(0) <= 1000,
+       "run.mask_max_age_bf16_winograd must lie in 0..1000 (frames of 20 ms; 0: none)"},
       {c.mask_role == "mask" || c.mask_role == "presence" || c.mask_role == "none",
        "mask.role must be mask, presence or none"},
       {(c.mask_role == "mask") == c.masked_input,

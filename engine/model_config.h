@@ -112,9 +112,13 @@ struct ModelConfig {
   //   run.mask_max_age_bf16 (optional, default run.mask_max_age): the age cap where stage 1
   //   does run in bf16: a stage 1 2.6 times cheaper affords running it more often within the
   //   same pose rate, and the fresher masks fit better.
+  //   run.mask_max_age_bf16_winograd (optional, default run.mask_max_age): the same where the
+  //   CPU has AVX512-BF16 and no AMX (AMD Zen 4, 5): there run.bf16 runs stage 1's Winograd
+  //   GEMMs in bf16 pairs (a quarter cheaper stage 1 on Zen 5), the rest in fp32.
   double run_beta = 0.99;
   bool run_bf16 = false;
   std::optional<int> mask_max_age_bf16;
+  std::optional<int> mask_max_age_bf16_winograd;
   int mask_max_age = 0;  // 0: none
   double mask_cut = 0.1;
   std::optional<double> mask_cut_reused;  // absent: mask_cut

@@ -200,6 +200,13 @@ void bwd_weights_scalar(const ConvShape& s, const float* x, const float* dy, flo
 // Winograd by the textbook, one output channel and one tile at a time (the reference the
 // SIMD variants are checked against, besides the direct convolution).
 void fwd_winograd_scalar(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
+  fwd_winograd_scalar_rounded(s, x, u, bias, y, [](float v) { return v; });
+}
+
+}  // namespace
+
+void fwd_winograd_scalar_rounded(const ConvShape& s, const float* x, const float* u, const float* bias, float* y,
+                                 float (*round_v)(float)) {
   static const float BT[6][6] = {{4, 0, -5, 0, 1, 0},  {0, -4, -4, 1, 1, 0}, {0, 4, -4, -1, 1, 0},
                                  {0, -2, -1, 2, 1, 0}, {0, 2, -1, -2, 1, 0}, {0, 4, 0, -5, 0, 1}};
   static const float AT[4][6] = {{1, 1, 1, 1, 1, 0}, {0, 1, -1, 2, -2, 0}, {0, 1, 1, 4, 4, 0}, {0, 1, -1, 8, -8, 1}};
@@ -226,7 +233,7 @@ void fwd_winograd_scalar(const ConvShape& s, const float* x, const float* u, con
               for (int c = 0; c < 6; ++c) {
                 float v = 0;
                 for (int k = 0; k < 6; ++k) v += t[r][k] * BT[c][k];
-                m[r][c] += v * u[((((std::size_t(r * 6 + c) * OCB + o / kBlock) * ICB + i / kBlock) * kBlock +
+                m[r][c] += round_v(v) * u[((((std::size_t(r * 6 + c) * OCB + o / kBlock) * ICB + i / kBlock) * kBlock +
                                    i % kBlock) * kBlock) + o % kBlock];
               }
           }
@@ -245,8 +252,6 @@ void fwd_winograd_scalar(const ConvShape& s, const float* x, const float* u, con
         for (int w = 0; w < OW; ++w) y[b.y(n, o, h, w)] = 0.f;
   relu_if_asked(s, y);
 }
-
-}  // namespace
 
 namespace {
 

@@ -108,6 +108,10 @@ bool winograd_pays(const ConvShape& s);
 // file so that no container code is instantiated inside an ISA variant.
 float* thread_scratch(std::size_t floats);
 std::size_t winograd_weight_floats(const ConvShape& s);
+// conv_scalar's textbook Winograd with each transformed input passed through round_v before
+// its product (the bf16 Winograd's reference rounds there; identity gives conv_scalar's).
+void fwd_winograd_scalar_rounded(const ConvShape& s, const float* x, const float* u, const float* bias, float* y,
+                                 float (*round_v)(float));
 void pack_winograd_weights(const ConvShape& s, const float* w_oihw, float* out);
 
 // Transposed convolution through the conv kernels (see DeconvShape). Weights are packed

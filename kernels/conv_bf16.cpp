@@ -18,6 +18,9 @@ namespace yelan::kernels {
 #if defined(YELAN_AMX_BUILT)
 extern const AmxBf16Kernels amx_bf16_kernels;  // conv_bf16_amx.cpp, compiled with AMX flags
 #endif
+#if defined(YELAN_WINOGRAD_BF16_BUILT)
+extern const WinogradBf16Kernels winograd_bf16_kernels;  // conv_winograd_bf16.cpp, AVX512-BF16 flags
+#endif
 
 bool amx_bf16_available() {
 #if defined(YELAN_AMX_BUILT) && defined(__linux__)
@@ -36,6 +39,37 @@ bool amx_bf16_available() {
 }
 
 bool amx_bf16_enabled() { return amx_bf16_available() && active_isa() == Isa::avx512; }
+
+bool winograd_bf16_available() {
+#if defined(YELAN_WINOGRAD_BF16_BUILT)
+  const CpuFeatures& f = cpu_features();
+  return f.avx512f && f.avx512bw && f.avx512vl && f.avx512dq && f.avx512bf16;
+#else
+  return false;
+#endif
+}
+
+bool winograd_bf16_enabled() { return winograd_bf16_available() && active_isa() == Isa::avx512; }
+
+std::size_t winograd_bf16_weight_halves(const ConvShape& s) { return winograd_weight_floats(s); }
+
+void pack_winograd_bf16_weights(const ConvShape& s, const float* u, std::uint16_t* out) {
+  const std::size_t blocks = winograd_weight_floats(s) / (kBlock * kBlock);  // [36][OCB][ICB]
+  for (std::size_t b = 0; b < blocks; ++b)
+    for (int k = 0; k < kBlock; ++k)
+      for (int n = 0; n < kBlock; ++n)
+        out[b * kBlock * kBlock + bf16_tile_index(k, n)] = to_bf16(u[(b * kBlock + k) * kBlock + n]);
+}
+
+void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint16_t* u, const float* bias, float* y) {
+  if (!winograd_applicable(s)) throw std::invalid_argument("conv_fwd_winograd_bf16: 3x3 stride 1 convolutions only");
+  if (!winograd_bf16_available()) throw std::logic_error("conv_fwd_winograd_bf16: this CPU gives no AVX512-BF16");
+#if defined(YELAN_WINOGRAD_BF16_BUILT)
+  winograd_bf16_kernels.fwd(s, x, u, bias, y);
+#else
+  (void)x; (void)u; (void)bias; (void)y;
+#endif
+}
 
 bool conv_bf16_applicable(const ConvShape& s) { return s.valid() && s.stride == 1; }
 
@@ -88,6 +122,14 @@ void conv_fwd_bf16_reference(const ConvShape& s, const float* x, const float* w,
   std::vector<float> wp(conv_weight_floats(s));
   pack_conv_weights(s, wr.data(), ConvPack::fwd, wp.data());
   conv_scalar.fwd(s, xr.data(), wp.data(), bias, y);
+}
+
+void conv_fwd_winograd_bf16_reference(const ConvShape& s, const float* x, const float* w, const float* bias,
+                                      float* y) {
+  std::vector<float> u(winograd_weight_floats(s));
+  pack_winograd_weights(s, w, u.data());
+  for (float& v : u) v = from_bf16(to_bf16(v));
+  fwd_winograd_scalar_rounded(s, x, u.data(), bias, y, [](float v) { return from_bf16(to_bf16(v)); });
 }
 
 void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w, const float* bias, float* y) {

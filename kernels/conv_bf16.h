@@ -62,11 +62,36 @@ struct AmxBf16Kernels {
 // (YELAN_ISA, --isa: a run pinned to avx2 or scalar stays off AVX-512 and AMX).
 bool amx_bf16_enabled();
 
+// Winograd F(4x4, 3x3) with its GEMMs in bf16, for CPUs with AVX512-BF16 and no AMX (AMD Zen
+// 4 and 5). VDPBF16PS does two multiply-adds a lane where VFMADD231PS does one, and on Zen 5
+// issues at 0.9 of its rate: 1.8x the fp32 GEMMs, which are 57% of stage 1 in fp32. The
+// transforms stay fp32; each transformed input is rounded to bf16 once (the input transform's
+// store), the transformed weights once when packed (from pack_winograd_weights' fp32, made
+// in double). Winograd's transformed values run larger than the inputs, but rounding is
+// relative: the error bound is in tests/kernels/test_conv_bf16.cpp, and on stage 1 the 56
+// validation dancers' mask IoU was the fp32 one to the printed digit (models/README.md).
+// Weights: [36][OCB][ICB][8 pairs][16 oc][2] halves (bf16_tile_index within each block).
+bool winograd_bf16_available();  // built with AVX512-BF16, and the CPU and OS give AVX-512 and it
+bool winograd_bf16_enabled();    // available, and no narrower ISA forced (as amx_bf16_enabled)
+std::size_t winograd_bf16_weight_halves(const ConvShape& s);
+// From pack_winograd_weights' output (the fp32 transformed weights).
+void pack_winograd_bf16_weights(const ConvShape& s, const float* u_wino, std::uint16_t* out);
+// Same contract as ConvKernels::fwd_winograd; winograd_bf16_available() must hold (throws
+// std::logic_error otherwise), and winograd_applicable(s).
+void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint16_t* u_bf16, const float* bias,
+                            float* y);
+struct WinogradBf16Kernels {
+  void (*fwd)(const ConvShape& s, const float* x, const std::uint16_t* u, const float* bias, float* y);
+};
+
 // bf16 as AMX reads it: round to nearest even, subnormals to signed zero, NaN kept NaN.
 std::uint16_t to_bf16(float v);
 float from_bf16(std::uint16_t h);
 // The references: the scalar kernels (conv_scalar) on the bf16-rounded x and w.
 void conv_fwd_bf16_reference(const ConvShape& s, const float* x, const float* w_oihw, const float* bias, float* y);
+// The scalar Winograd with the transformed weights and each transformed input rounded to bf16.
+void conv_fwd_winograd_bf16_reference(const ConvShape& s, const float* x, const float* w_oihw, const float* bias,
+                                      float* y);
 void deconv2x2_fwd_bf16_reference(const DeconvShape& d, const float* x, const float* w_iohw, const float* bias, float* y);
 
 }  // namespace yelan::kernels

@@ -24,6 +24,41 @@ constexpr int CONV_DW_CT = VL == 16 ? 16 : 4;
 #include "kernels/conv_direct.inl"
 #include "kernels/conv_winograd.inl"
 
+// The fp32 Winograd: its 36 GEMMs over channels are the direct convolution's tile with one tap.
+void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
+  const int ICB = s.icb(), OCB = s.ocb();
+  const std::ptrdiff_t cs = std::ptrdiff_t(kWinoChunk) * kBlock;
+  const bool half_last = s.oc - (OCB - 1) * kBlock <= kBlock / 2;  // see tile
+  const auto gemm = [&](const float* V, float* M, int tc) {
+    const Tap one{0, 0};
+    for (int xi = 0; xi < 36; ++xi)
+      for (int ob0 = 0; ob0 < OCB; ob0 += CONV_NB) {
+        const int nb = std::min(CONV_NB, OCB - ob0);
+        int tile_r;
+        const TileFn* tiles = tiles_for_group(nb, ob0 + nb == OCB && half_last, &tile_r);
+        TileArgs a;
+        a.src_r = kBlock;
+        a.src_cb = cs;
+        a.w = u + (std::ptrdiff_t(xi) * OCB + ob0) * ICB * kBlock * kBlock;
+        a.w_cb = kBlock * kBlock;
+        a.w_ob = std::ptrdiff_t(ICB) * kBlock * kBlock;
+        a.taps = &one;
+        a.ntaps = 1;
+        a.ncb = ICB;
+        a.last_lanes = s.ic - (ICB - 1) * kBlock;
+        a.dst_r = kBlock;
+        a.dst_ob = cs;
+        a.bias = nullptr;
+        for (int t = 0; t < tc; t += tile_r) {
+          a.src = V + wino_v_index(xi, 0, t, ICB);
+          a.dst = M + wino_m_index(xi, ob0, t, OCB);
+          tiles[std::min(tile_r, tc - t) - 1](a);
+        }
+      }
+  };
+  winograd_fwd<float>(s, x, bias, y, [](float* at, vf v) { storef(at, v); }, gemm);
+}
+
 constexpr ConvKernels kTable{Isa::YELAN_VARIANT_ISA, conv_fwd, conv_bwd_data, conv_bwd_weights, conv_fwd_winograd};
 
 }  // namespace

@@ -1,9 +1,12 @@
-// Winograd F(4x4, 3x3) forward on native vectors, after conv_direct.inl (it reuses the
-// register-blocked `tile` as the GEMM over channels). Tiles are processed in chunks of
-// kWinoChunk per thread: input transform -> 36 GEMMs -> output transform, all in a
-// thread's scratch (thread_scratch) that stays in L2 and is allocated once per thread.
+// Winograd F(4x4, 3x3) forward on native vectors: the transforms and the chunk loop, shared
+// by the fp32 kernel (conv_simd.cpp, whose GEMMs are conv_direct.inl's register-blocked
+// `tile`) and the bf16 one (conv_winograd_bf16.cpp, GEMMs on AVX512-BF16 pairs). Tiles are
+// processed in chunks of kWinoChunk per thread: input transform -> 36 GEMMs -> output
+// transform, all in a thread's scratch (thread_scratch) that stays in L2 and is allocated once
+// per thread. Needs kernels/simd.h, kernels/parallel.h and kernels/conv.h.
 
 constexpr int kWinoChunk = 48;
+constexpr int kWinoNV = kBlock / VL;  // native vectors in a 16-channel block
 
 // B^T d for six vectors (one column or row of a 6x6 tile).
 inline void wino_bt(const vf d[6], vf o[6]) {
@@ -25,21 +28,32 @@ inline void wino_at(const vf m[6], vf o[4]) {
   o[3] = b + (vf{} + 8.f) * d + m[5];
 }
 
-void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
+// The layouts of one chunk: V[36][ICB][kWinoChunk][16] transformed inputs of element type T
+// (stored by store_v(T* at, vf value), which may round), M[36][OCB][kWinoChunk][16] fp32
+// products. gemm(V, M, tc) fills M's first tc tiles of every product and block.
+inline std::ptrdiff_t wino_v_index(int xi, int cb, int t, int icb) {
+  return ((std::ptrdiff_t(xi) * icb + cb) * kWinoChunk + t) * kBlock;
+}
+inline std::ptrdiff_t wino_m_index(int xi, int ob, int t, int ocb) {
+  return ((std::ptrdiff_t(xi) * ocb + ob) * kWinoChunk + t) * kBlock;
+}
+
+template <class T, class StoreV, class Gemm>
+void winograd_fwd(const ConvShape& s, const float* x, const float* bias, float* y, StoreV store_v, Gemm gemm) {
   const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb();
-  const int TH = (OH + 3) / 4, TW = (OW + 3) / 4, T = TH * TW;
-  const int chunks = (T + kWinoChunk - 1) / kWinoChunk;
+  const int TH = (OH + 3) / 4, TW = (OW + 3) / 4, T_ = TH * TW;
+  const int chunks = (T_ + kWinoChunk - 1) / kWinoChunk;
   const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock, y_plane = std::ptrdiff_t(OH) * OW * kBlock;
-  const std::ptrdiff_t cs = std::ptrdiff_t(kWinoChunk) * kBlock;  // one channel block of one product
-  const bool half_last = s.oc - (OCB - 1) * kBlock <= kBlock / 2;  // see tile
+  const std::size_t cs = std::size_t(kWinoChunk) * kBlock;  // one channel block of one product
   on_team(worth_sharing(s.flops() / 4), [&] {  // a quarter of the multiplies
-    // V: [36][ICB][chunk][16] transformed inputs, M: [36][OCB][chunk][16] products
-    float* V = thread_scratch(std::size_t(36) * (ICB + OCB) * cs);
-    float* M = V + std::size_t(36) * ICB * cs;
+    // V's share is sized in floats whatever T is (bf16 uses half of it): one scratch shape.
+    float* scratch = thread_scratch(std::size_t(36) * (ICB + OCB) * cs);
+    T* V = reinterpret_cast<T*>(scratch);
+    float* M = scratch + std::size_t(36) * ICB * cs;
 #pragma omp for collapse(2) schedule(static)
     for (int n = 0; n < s.n; ++n)
       for (int ch = 0; ch < chunks; ++ch) {
-        const int t0 = ch * kWinoChunk, tc = std::min(kWinoChunk, T - t0);
+        const int t0 = ch * kWinoChunk, tc = std::min(kWinoChunk, T_ - t0);
         // Input transform: V[xi][cb][t] = (B^T d B)[xi] for the tile's 6x6 input patch.
         for (int cb = 0; cb < ICB; ++cb) {
           const float* xb = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane;
@@ -47,7 +61,7 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
             const int ih0 = (t0 + t) / TW * 4 - s.pad_h, iw0 = (t0 + t) % TW * 4 - s.pad_w;
             // Most tiles lie inside the image: their 36 loads need no test.
             const bool inside = ih0 >= 0 && iw0 >= 0 && ih0 + 6 <= s.ih && iw0 + 6 <= s.iw;
-            for (int q = 0; q < CONV_NV; ++q) {
+            for (int q = 0; q < kWinoNV; ++q) {
               vf d[6][6], r[6][6];
               if (inside) {
                 const float* p = xb + (std::ptrdiff_t(ih0) * s.iw + iw0) * kBlock + q * VL;
@@ -71,51 +85,24 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
               for (int i = 0; i < 6; ++i) {  // rows: (B^T d) B
                 vf out[6];
                 wino_bt(r[i], out);
-                for (int j = 0; j < 6; ++j)
-                  storef(V + ((std::ptrdiff_t(i * 6 + j) * ICB + cb) * kWinoChunk + t) * kBlock + q * VL, out[j]);
+                for (int j = 0; j < 6; ++j) store_v(V + wino_v_index(i * 6 + j, cb, t, ICB) + q * VL, out[j]);
               }
             }
           }
         }
         // 36 GEMMs: M[xi][ob][t] = sum over channels of V[xi][cb][t] U[xi][ob][cb].
-        Tap one{0, 0};
-        for (int xi = 0; xi < 36; ++xi)
-          for (int ob0 = 0; ob0 < OCB; ob0 += CONV_NB) {
-            const int nb = std::min(CONV_NB, OCB - ob0);
-            int tile_r;
-            const TileFn* tiles = tiles_for_group(nb, ob0 + nb == OCB && half_last, &tile_r);
-            TileArgs a;
-            a.src_r = kBlock;
-            a.src_cb = cs;
-            a.w = u + (std::ptrdiff_t(xi) * OCB + ob0) * ICB * kBlock * kBlock;
-            a.w_cb = kBlock * kBlock;
-            a.w_ob = std::ptrdiff_t(ICB) * kBlock * kBlock;
-            a.taps = &one;
-            a.ntaps = 1;
-            a.ncb = ICB;
-            a.last_lanes = s.ic - (ICB - 1) * kBlock;
-            a.dst_r = kBlock;
-            a.dst_ob = cs;
-            a.bias = nullptr;
-            for (int t = 0; t < tc; t += tile_r) {
-              const int r = std::min(tile_r, tc - t);
-              a.src = V + (std::ptrdiff_t(xi) * ICB * kWinoChunk + t) * kBlock;
-              a.dst = M + ((std::ptrdiff_t(xi) * OCB + ob0) * kWinoChunk + t) * kBlock;
-              tiles[r - 1](a);
-            }
-          }
+        gemm(static_cast<const T*>(V), M, tc);
         // Output transform: y = A^T M A + bias, clipped at the image's right and bottom.
         for (int ob = 0; ob < OCB; ++ob) {
           float* yb = y + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
           for (int t = 0; t < tc; ++t) {
             const int oh0 = (t0 + t) / TW * 4, ow0 = (t0 + t) % TW * 4;
-            for (int q = 0; q < CONV_NV; ++q) {
+            for (int q = 0; q < kWinoNV; ++q) {
               const vf b = bias ? loadf(bias + ob * kBlock + q * VL) : vf{};
               vf r[4][6];
               for (int j = 0; j < 6; ++j) {
                 vf col[6], out[4];
-                for (int i = 0; i < 6; ++i)
-                  col[i] = loadf(M + ((std::ptrdiff_t(i * 6 + j) * OCB + ob) * kWinoChunk + t) * kBlock + q * VL);
+                for (int i = 0; i < 6; ++i) col[i] = loadf(M + wino_m_index(i * 6 + j, ob, t, OCB) + q * VL);
                 wino_at(col, out);
                 for (int i = 0; i < 4; ++i) r[i][j] = out[i];
               }

@@ -29,13 +29,34 @@ bool& bf16_convs() {
   return on;
 }
 
+Bf16Path bf16_path_if(bool on) {
+  if (!on) return Bf16Path::none;
+  if (kernels::amx_bf16_enabled()) return Bf16Path::amx;
+  return kernels::winograd_bf16_enabled() ? Bf16Path::winograd : Bf16Path::none;
+}
+
+Bf16Path bf16_path() { return bf16_path_if(bf16_convs()); }
+
+const char* bf16_path_name(Bf16Path p) {
+  switch (p) {
+    case Bf16Path::amx: return "bf16 on AMX";
+    case Bf16Path::winograd: return "bf16 Winograd on AVX512-BF16";
+    case Bf16Path::none: break;
+  }
+  return "fp32";
+}
+
+bool bf16_active() { return bf16_path() != Bf16Path::none; }
+
 // A 1x1 convolution is a copy into bf16 and a pass over the result as much as a product
 // (stage 1's 24->16 output layer: 0.25 against 0.15 ms in fp32), so it stays fp32.
-bool bf16_active() { return bf16_convs() && kernels::amx_bf16_enabled(); }
+bool takes_bf16(const kernels::ConvShape& s) {
+  return bf16_path() == Bf16Path::amx && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s);
+}
 
-bool takes_bf16(const kernels::ConvShape& s) { return bf16_active() && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s); }
-
-bool takes_bf16(const kernels::DeconvShape& d) { return bf16_active() && kernels::deconv2x2_bf16_applicable(d); }
+bool takes_bf16(const kernels::DeconvShape& d) {
+  return bf16_path() == Bf16Path::amx && kernels::deconv2x2_bf16_applicable(d);
+}
 
 std::vector<ConvRecord>*& conv_trace() {
   static std::vector<ConvRecord>* trace = nullptr;
@@ -180,6 +201,7 @@ void Conv2d::pack_folded(const kernels::ConvShape& s, const float* scale, const 
   fold_bias16_ = Floats(std::size_t((spec_.out + 15) / 16) * 16);
   for (int o = 0; o < spec_.out; ++o) fold_bias16_[o] = shift[o] + (bias ? scale[o] * bias->value[o] : 0.f);
   fold_bf16_.clear();  // packed from fold_w_ when first asked for
+  fold_wino_bf16_.clear();  // from fold_wino_, likewise
   folded_ = true;
 }
 
@@ -199,6 +221,17 @@ void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, cons
     s.relu = relu;
     record(x, y, s);
     kernels::conv_fwd_bf16_amx(s, x.data, fold_bf16_.data(), fold_bias16_.data(), y.data);
+    return;
+  }
+  if (winograd && fold_wino_.size() && winograd_allowed() && kernels::winograd_pays(s) &&
+      bf16_path() == Bf16Path::winograd) {
+    if (fold_wino_bf16_.empty()) {
+      fold_wino_bf16_.resize(kernels::winograd_bf16_weight_halves(s));
+      kernels::pack_winograd_bf16_weights(s, fold_wino_.data(), fold_wino_bf16_.data());
+    }
+    s.relu = relu;
+    record(x, y, s);
+    kernels::conv_fwd_winograd_bf16(s, x.data, fold_wino_bf16_.data(), fold_bias16_.data(), y.data);
     return;
   }
   run_forward(x, y, fold_w_.data(), fold_wino_.size() ? fold_wino_.data() : nullptr, fold_bias16_.data(), winograd,

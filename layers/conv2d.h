@@ -27,8 +27,9 @@ std::uint64_t& conv_flops();
 bool& winograd_allowed();
 
 // Inference convolutions (forward_folded: an eval-mode ConvBn's) of stride 1 and kernel > 1x1
-// in bf16 on the CPU's AMX tiles (kernels/conv_bf16.h) where it has them; elsewhere, or off
-// (the default), fp32 as before. Set per thread (the caller's: the kernels' own threads never
+// in bf16 on the CPU's AMX tiles (kernels/conv_bf16.h) where it has them; on a CPU with
+// AVX512-BF16 and no AMX, the Winograd ones with their GEMMs in bf16 (the rest stay fp32);
+// elsewhere, or off (the default), fp32 as before. Set per thread (the caller's: the kernels' own threads never
 // read it); a network sets it for its own forward with Bf16Convs (stage 1 under run.bf16).
 bool& bf16_convs();
 class Bf16Convs {
@@ -41,9 +42,14 @@ class Bf16Convs {
  private:
   bool saved_;
 };
-// bf16_convs() on a CPU that runs the bf16 path (kernels::amx_bf16_enabled).
+// bf16_convs() on a CPU that runs a bf16 path: AMX (kernels::amx_bf16_enabled), or else
+// Winograd on AVX512-BF16 (kernels::winograd_bf16_enabled).
 bool bf16_active();
-// Whether a forward_folded of this shape takes the bf16 path now (bf16_active, the shape).
+enum class Bf16Path { none, amx, winograd };
+Bf16Path bf16_path();  // which of them bf16_convs() takes on this CPU now
+Bf16Path bf16_path_if(bool on);  // which of them a network with bf16 `on` takes on this CPU
+const char* bf16_path_name(Bf16Path p);  // "fp32", "bf16 on AMX", "bf16 Winograd on AVX512-BF16"
+// Whether a forward_folded of this shape takes the AMX path now (bf16_path, the shape).
 bool takes_bf16(const kernels::ConvShape& s);
 bool takes_bf16(const kernels::DeconvShape& d);  // the 2x2/2 up-sampling, under NoGrad
 
@@ -94,6 +100,7 @@ class Conv2d {
   Floats fwd_, bwd_, wino_, bias16_, dw_packed_, db16_, dw_plain_;
   Floats fold_w_, fold_wino_, fold_bias16_;
   std::vector<std::uint16_t> fold_bf16_;  // the folded weights for the bf16 kernel, once it is asked for
+  std::vector<std::uint16_t> fold_wino_bf16_;  // fold_wino_ in bf16 pairs, once the bf16 Winograd asks
   std::vector<std::uint16_t> up_bf16_;    // a 2x2/2 transposed conv's, packed on its first bf16 forward
   kernels::ConvShape conv_shape(const Act& x) const;   // the kernel's conv (for a deconv: its adjoint)
   kernels::DeconvShape deconv_shape(const Act& x) const;

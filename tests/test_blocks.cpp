@@ -324,15 +324,17 @@ TEST_CASE("BN folded into the conv under NoGrad matches the eval-mode forward", 
 
 // Where the CPU has AMX-BF16 an eval-mode ConvBn under Bf16Convs runs the bf16 kernel on its
 // folded weights: within bf16's rounding of the fp32 fold, ReLU fused, and fp32 again,
-// bit for bit, once the scope ends; 1x1 and stride-2 convolutions stay fp32.
-TEST_CASE("ConvBn folded under Bf16Convs: bf16 on AMX for k > 1 stride 1, fp32 elsewhere and after", "[layers][blocks]") {
-  const bool amx = yelan::kernels::amx_bf16_enabled();  // without it every case is fp32, bit for bit
+// bit for bit, once the scope ends; 1x1 and stride-2 convolutions stay fp32. Where it has
+// AVX512-BF16 and no AMX, the convolutions that take Winograd (3x3/1, 16 channels and more,
+// a map of 24 tiles) run its bf16 GEMMs; the rest stay fp32.
+TEST_CASE("ConvBn folded under Bf16Convs: bf16 on AMX for k > 1 stride 1, Winograd's on AVX512-BF16, fp32 elsewhere and after", "[layers][blocks]") {
+  const Bf16Path path = bf16_path_if(true);  // none: every case is fp32, bit for bit
   struct Case {
     ConvSpec spec;
-    bool bf16;
+    bool amx, winograd;  // which path computes it in bf16
   };
-  for (const Case& c : {Case{{20, 40, 3, 1, 1}, true}, Case{{6, 24, 3, 1, 1}, true}, Case{{24, 16, 1, 1, 0}, false},
-                        Case{{20, 24, 3, 2, 1}, false}}) {
+  for (const Case& c : {Case{{20, 40, 3, 1, 1}, true, true}, Case{{6, 24, 3, 1, 1}, true, false},
+                        Case{{24, 16, 1, 1, 0}, false, false}, Case{{20, 24, 3, 2, 1}, false, false}}) {
     INFO("in " << c.spec.in << " out " << c.spec.out << " k " << c.spec.k << " stride " << c.spec.stride);
     ConvBn b(c.spec, true);
     b.init(21);
@@ -362,9 +364,12 @@ TEST_CASE("ConvBn folded under Bf16Convs: bf16 on AMX for k > 1 stride 1, fp32 e
       scale = std::max(scale, double(std::fabs(fp32[i])));
       differ += bf[i] != fp32[i];
     }
-    if (c.bf16 && amx) {
+    if ((c.amx && path == Bf16Path::amx) || (c.winograd && path == Bf16Path::winograd)) {
       CHECK(differ > fp32.size() / 8);
-      CHECK(worst / scale < 2e-2);
+      // Winograd's transformed inputs run to ~40x the inputs and its output transform weighs
+      // products by up to 64, so rounding them costs more than the direct sum's (measured
+      // 0.062 of the largest output here; stage 1's masks kept their IoU: models/README.md).
+      CHECK(worst / scale < (path == Bf16Path::amx ? 2e-2 : 0.1));
     } else {
       CHECK(differ == 0);
     }

@@ -301,7 +301,7 @@ TEST_CASE("mask net with run.mask_mirror: under NoGrad the mean of the net on x 
   for (std::size_t i = 0; i < m.scores.size(); ++i) REQUIRE(mf.scores[i] == Approx(m.scores[i]).margin(1e-6));
 }
 
-TEST_CASE("mask net with run.bf16: bf16 masks within 3% of fp32 where the CPU has AMX, the same bits elsewhere and in training",
+TEST_CASE("mask net with run.bf16: bf16 masks within 3% of fp32 where the CPU has AMX or AVX512-BF16, the same bits elsewhere and in training",
           "[networks][mask]") {
   const std::string text =
       R"({"name":"bf16-mask","input":{"channels":6,"sensor_height":48,"sensor_width":80,"downscale":1,"window":1},)"
@@ -325,7 +325,7 @@ TEST_CASE("mask net with run.bf16: bf16 masks within 3% of fp32 where the CPU ha
   plain.forward(x.act);
   const MaskOut b(bf), p(plain);
   CHECK_FALSE(layers::bf16_convs());  // the net's scope ended with its forward
-  if (!yelan::kernels::amx_bf16_enabled()) {
+  if (layers::bf16_path_if(true) == layers::Bf16Path::none) {
     REQUIRE(b.masks == p.masks);
     return;
   }

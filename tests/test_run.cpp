@@ -20,6 +20,7 @@
 #include "engine/run/pipeline.h"
 #include "engine/run/stream_eval.h"
 #include "kernels/conv_bf16.h"
+#include "layers/conv2d.h"
 #include "weights_tools/weights_file.h"
 
 namespace {
@@ -1354,11 +1355,12 @@ TEST_CASE("run: run.mask_max_age reruns stage 1 once the mask to reuse is that o
   CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--mask-max-age", "3"}).code == 2);
 }
 
-TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX, and there run.mask_max_age_bf16 caps early exit", "[run][cli]") {
+TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX or AVX512-BF16, each path with its own age cap", "[run][cli]") {
   yelan::test::CliTempDir d("bf16");
   const std::vector<std::string> recs = dancer_and_empty(d);
   const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
-  const bool amx = yelan::kernels::amx_bf16_enabled();
+  const yelan::layers::Bf16Path path = yelan::layers::bf16_path_if(true);
+  const bool amx = path == yelan::layers::Bf16Path::amx, wino = path == yelan::layers::Bf16Path::winograd;
   std::ostringstream progress;
   const auto run = [&](std::optional<bool> bf16, std::optional<int> max_age) {
     yelan::run::RunOptions o;
@@ -1366,12 +1368,15 @@ TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX, and there r
     o.mask_max_age = max_age;
     return yelan::run::evaluate_recordings(w, recs, 0.6, 0.1, o, progress, true);
   };
-  // The shipped default: bf16 and a cap of 3 where the CPU has AMX, else fp32 and its cap of 6.
+  // The shipped default: bf16 and a cap of 3 where the CPU has AMX, bf16 Winograd and a cap of
+  // 4 where it has AVX512-BF16 alone, else fp32 and its cap of 6.
   const auto model = run(std::nullopt, std::nullopt);
-  CHECK(model.stage1_bf16 == amx);
-  CHECK(model.mask_max_age == (amx ? 3 : 6));
+  CHECK(model.stage1_bf16 == (amx || wino));
+  CHECK(model.stage1_precision == yelan::layers::bf16_path_name(path));
+  CHECK(model.mask_max_age == (amx ? 3 : wino ? 4 : 6));
   const auto fp32 = run(false, std::nullopt);
   CHECK_FALSE(fp32.stage1_bf16);
+  CHECK(fp32.stage1_precision == "fp32");
   CHECK(fp32.mask_max_age == 6);
   // An explicit cap holds on either path; at the same cap bf16's masks differ from fp32's by
   // rounding alone (without AMX they are the same run).
@@ -1380,7 +1385,7 @@ TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX, and there r
   CHECK(b.mask_max_age == 3);
   REQUIRE(a.poses.size() == b.poses.size());
   REQUIRE(a.mask_ticks > 0);
-  if (amx) {
+  if (amx || wino) {
     CHECK(b.stage1_bf16);
     CHECK(b.mask_iou == Approx(a.mask_iou).margin(0.02));
   } else {
@@ -1395,6 +1400,10 @@ TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX, and there r
   CHECK(c.mask_max_age == 6);
   CHECK_FALSE(yelan::parse_model_config(yelan::with_run_setting(cfg, "bf16", "false"), "x").run_bf16);
   CHECK_THROWS_AS(yelan::with_run_setting(cfg, "mask_max_age_bf16", "-1"), yelan::ConfigError);
+  CHECK_FALSE(c.mask_max_age_bf16_winograd);
+  const std::string cfg54 = slurp(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s54.json");
+  CHECK(yelan::parse_model_config(cfg54, "s54").mask_max_age_bf16_winograd == 4);
+  CHECK_THROWS_AS(yelan::with_run_setting(cfg54, "mask_max_age_bf16_winograd", "1001"), yelan::ConfigError);
   CHECK_THROWS_AS(yelan::with_run_setting(cfg, "bf16", "\"maybe\""), yelan::ConfigError);
   const auto bad = run_cli({"eval", "--run", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--bf16", "maybe"});
   CHECK(bad.code == 2);

@@ -71,4 +71,12 @@ inline void amx_or_skip() {
   std::exit(77);
 }
 
+// Where the CPU gives no AVX512-BF16, or the build no Winograd in bf16: SKIPPED (exit 77).
+inline void winograd_bf16_or_skip() {
+  if (yelan::kernels::winograd_bf16_available()) return;
+  std::printf("SKIP: no AVX512-BF16 Winograd here (cpu: %s)\n", yelan::kernels::cpu_features().describe().c_str());
+  std::fflush(stdout);
+  std::exit(77);
+}
+
 }  // namespace yelan::test

@@ -101,7 +101,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       for (std::size_t i = 0; i < s.times.stage1_ms.size(); ++i) nets += s.times.stage1_ms[i] + s.times.stage2_ms[i];
       rows.back().nets_ms = nets / double(std::max<std::size_t>(1, s.times.stage1_ms.size()));
       rows.back().crop_share = run::crop_share(s);
-      err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s (stage 1 " << (pipe.stage1_bf16() ? "bf16 on AMX" : "fp32") << ", age cap " << pipe.mask_max_age() << "; beta " << pipe.beta()
+      err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s (stage 1 " << pipe.stage1_precision() << ", age cap " << pipe.mask_max_age() << "; beta " << pipe.beta()
           << "; TORE read in stage 2's box on " << s.tore_box_ticks << " of " << s.ticks << " ticks, "
           << 100 * s.tore_box_area / double(std::max<std::uint64_t>(1, s.tore_box_ticks)) << "% of the frame; TORE mean "
           << std::accumulate(s.times.tore_ms.begin(), s.times.tore_ms.end(), 0.0) / double(std::max<std::size_t>(1, s.times.tore_ms.size())) << " ms)\n";

@@ -4,7 +4,8 @@
 # first), the kernel peak measured before and after, the per-round ratios and medians by
 # alternating_rounds.py. Machines are shared and noisy: nothing else may run beside it.
 # Y_OLD=BINARY: the old rounds run that build of yelan (two builds on the same weights).
-# ARGS: more flags for both sides' bench run (e.g. ARGS='--mask-max-age 2').
+# ARGS: more flags for both sides' bench run (e.g. ARGS='--mask-max-age 2'); OLD_ARGS: for the
+# old side's alone (OLD_ARGS='--bf16 off': one build, one file, stage 1 in fp32 against bf16).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 old=$1 new=$2 out=$3 note=${4:-}
@@ -14,18 +15,18 @@ rm -f "$raw"
 order="new old"
 [ -n "${SERIES:-}" ] && order="old new"
 {
-  echo "# $(date -u +%F): yelan bench run --weights W --threads-list 1 --no-torch${ARGS:+ $ARGS}, alternating rounds ($order)"
+  echo "# $(date -u +%F): yelan bench run --weights W --threads-list 1 --no-torch${ARGS:+ $ARGS}${OLD_ARGS:+ (old side also $OLD_ARGS)}, alternating rounds ($order)"
   echo "# CPU: $(lscpu | grep 'Model name' | sed 's/  */ /g')"
   echo "# peak: $("$Y" bench kernels --quick 2>&1 | grep -i '^peak' | head -1)"
   echo "# old: $old${Y_OLD:+ (by $Y_OLD)}; new: $new${Y_OLD:+ (by $Y)}${note:+; $note}; nothing else running"
 } > "$out"
 for r in $(seq 1 "${ROUNDS:-9}"); do
   for w in $order; do
-    W=$old Yw=${Y_OLD:-$Y}
-    [ "$w" = new ] && W=$new Yw=$Y
+    W=$old Yw=${Y_OLD:-$Y} side_args=${OLD_ARGS:-}
+    [ "$w" = new ] && W=$new Yw=$Y side_args=
     log=$D/bench-alternating-$$-$w-$r.txt
     # shellcheck disable=SC2086  # ARGS is a list of flags
-    "$Yw" bench run --weights "$W" --threads-list 1 --no-torch ${ARGS:-} > "$log" 2>&1
+    "$Yw" bench run --weights "$W" --threads-list 1 --no-torch ${ARGS:-} $side_args > "$log" 2>&1
     echo "$w $r $(awk '$2=="1" && $3+0>0 {print $3; exit}' "$log")" | tee -a "$raw"
   done
 done

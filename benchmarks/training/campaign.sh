@@ -945,6 +945,11 @@ case "$what" in
   ship-s51)
     "$Y" weights combine --mask models/campaign/mask-s52/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
       --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s51.json -o models/default.h5 ;;
+  # The default since the fifty-fourth session: -s51's networks and calibration; where stage 1
+  # runs its Winograd GEMMs in bf16 on AVX512-BF16 (no AMX: AMD Zen 4, 5) the age cap is 4.
+  ship-s54)
+    "$Y" weights combine --mask models/campaign/mask-s52/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
+      --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s54.json -o models/default.h5 ;;
   combine)
     "$Y" weights combine --mask "$RUNS/${MASK_RUN:-mask-s2}/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;

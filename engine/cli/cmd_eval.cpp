@@ -88,7 +88,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
       << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1) << "; with the true head depth: MPJPE "
       << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm << " mm";
   t << "; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks ("
-    << (r.stage1_bf16 ? "bf16 on AMX" : "fp32") << ", age cap " << r.mask_max_age << ")";
+    << r.stage1_precision << ", age cap " << r.mask_max_age << ")";
   if (r.mirror_runs) t << " (mirrored too on " << std::setprecision(1) << 100 * r.mirror_run_fraction << "%)";
   if (r.mask_crop_runs)
     t << " (on " << std::setprecision(1) << 100 * r.mask_crop_share << "% of the frame on the " << r.mask_crop_runs << " runs on a crop)";
@@ -129,6 +129,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              std::to_string(count) +
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
                              ", \"stage1_bf16\": " + std::string(r.stage1_bf16 ? "true" : "false") +
+                             ", \"stage1_precision\": \"" + r.stage1_precision + "\"" +
                              ", \"mask_max_age\": " + std::to_string(r.mask_max_age) +
                              ", \"mirror_run_fraction\": " + std::to_string(r.mirror_run_fraction) +
                              ", \"mask_crop_runs\": " + std::to_string(r.mask_crop_runs) +

@@ -142,7 +142,7 @@ struct PosePipeline::Impl {
   DepthSmoother depth_smoother;
   JointSmoother joint_smoother;
   double beta = 0.99;
-  bool stage1_bf16 = false;  // stage 1 in bf16 on AMX (run.bf16 or RunOptions::bf16, and the CPU)
+  layers::Bf16Path stage1_path = layers::Bf16Path::none;  // run.bf16 or RunOptions::bf16, and the CPU
   Pose last;
   bool have_last = false;
   RunStats stats;
@@ -183,8 +183,10 @@ struct PosePipeline::Impl {
     if (o.depth_forearms) nets.cfg.depth_forearms = *o.depth_forearms;
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
     nets.mask.set_bf16(o.bf16.value_or(cfg.run_bf16));
-    stage1_bf16 = nets.mask.bf16() && kernels::amx_bf16_enabled();
-    if (stage1_bf16 && cfg.mask_max_age_bf16) nets.cfg.mask_max_age = *cfg.mask_max_age_bf16;
+    stage1_path = layers::bf16_path_if(nets.mask.bf16());
+    if (stage1_path == layers::Bf16Path::amx && cfg.mask_max_age_bf16) nets.cfg.mask_max_age = *cfg.mask_max_age_bf16;
+    if (stage1_path == layers::Bf16Path::winograd && cfg.mask_max_age_bf16_winograd)
+      nets.cfg.mask_max_age = *cfg.mask_max_age_bf16_winograd;
     if (o.mask_max_age) {
       if (*o.mask_max_age < 0) throw std::invalid_argument("mask_max_age must be >= 0 (frames; 0: none)");
       nets.cfg.mask_max_age = *o.mask_max_age;
@@ -613,7 +615,8 @@ const RunStats& PosePipeline::stats() const { return impl_->stats; }
 std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
 std::array<double, 2> PosePipeline::presence_ab() const { return {impl_->nets.cfg.presence_a, impl_->nets.cfg.presence_b}; }
 double PosePipeline::beta() const { return impl_->beta; }
-bool PosePipeline::stage1_bf16() const { return impl_->stage1_bf16; }
+bool PosePipeline::stage1_bf16() const { return impl_->stage1_path != layers::Bf16Path::none; }
+std::string PosePipeline::stage1_precision() const { return layers::bf16_path_name(impl_->stage1_path); }
 int PosePipeline::mask_max_age() const { return impl_->nets.cfg.mask_max_age; }
 
 double presence_feature(double share) { return std::log(std::max(0.0, share) + 0.001); }

@@ -133,8 +133,9 @@ class PosePipeline {
   std::string config_name() const;
   std::array<double, 2> presence_ab() const;  // the calibration P(person) is read with: {a, b}
   double beta() const;  // the early-exit threshold in use
-  bool stage1_bf16() const;  // stage 1 in bf16 on AMX (run.bf16 or --bf16, and the CPU has it)
-  int mask_max_age() const;  // the age cap in use (0: none): run.mask_max_age_bf16 where stage 1 runs bf16
+  bool stage1_bf16() const;  // stage 1 in bf16 (run.bf16 or --bf16, and the CPU has AMX or AVX512-BF16)
+  std::string stage1_precision() const;  // "fp32", "bf16 on AMX" or "bf16 Winograd on AVX512-BF16"
+  int mask_max_age() const;  // the age cap in use (0: none): run.mask_max_age_bf16 where stage 1 runs bf16 on AMX, run.mask_max_age_bf16_winograd on AVX512-BF16
   bool causal() const;
   // The time of the latest tick. A windowed (bidirectional) stage 2 hands out a window's poses
   // after its last tick: inside the callback the masks above are that tick's, so a pose of an

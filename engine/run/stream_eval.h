@@ -70,7 +70,8 @@ struct StreamEvalResult {
   std::uint64_t dancer_shown() const { return person_found + person_missed - dancer_hidden; }
   std::uint64_t dancer_shown_called() const { return person_found - dancer_hidden_called; }
   double mask_run_fraction = 0;    // of the ticks that ran stage 2
-  bool stage1_bf16 = false;        // stage 1 ran in bf16 on AMX (PosePipeline::stage1_bf16)
+  bool stage1_bf16 = false;        // stage 1 ran in bf16 (PosePipeline::stage1_bf16)
+  std::string stage1_precision = "fp32";  // PosePipeline::stage1_precision
   int mask_max_age = 0;            // the age cap it ran under (0: none)
   double mirror_run_fraction = 0;  // of the same ticks, stage 1 run again mirrored (run.mask_mirror)
   double ms_per_tick = 0;          // mean over ticks, all stages
