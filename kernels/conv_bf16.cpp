@@ -43,7 +43,8 @@ bool amx_bf16_enabled() { return amx_bf16_available() && active_isa() == Isa::av
 bool winograd_bf16_available() {
 #if defined(YELAN_WINOGRAD_BF16_BUILT)
   const CpuFeatures& f = cpu_features();
-  return f.avx512f && f.avx512bw && f.avx512vl && f.avx512dq && f.avx512bf16;
+  // The file is built with the avx512 variant's flags (FMA, AVX2, F16C among them) and -mavx512bf16.
+  return f.avx512f && f.avx512bw && f.avx512vl && f.avx512dq && f.avx2 && f.fma && f.f16c && f.avx512bf16;
 #else
   return false;
 #endif
