@@ -52,6 +52,11 @@ bool winograd_bf16_available() {
 
 bool winograd_bf16_enabled() { return winograd_bf16_available() && active_isa() == Isa::avx512; }
 
+bool winograd_bf16_pays(const ConvShape& s) {
+  const int tiles = ((s.oh() + 3) / 4) * ((s.ow() + 3) / 4) * s.n;
+  return winograd_pays(s) || (winograd_applicable(s) && s.oc >= 16 && tiles >= 24);
+}
+
 std::size_t winograd_bf16_weight_halves(const ConvShape& s) { return winograd_weight_floats(s); }
 
 void pack_winograd_bf16_weights(const ConvShape& s, const float* u, std::uint16_t* out) {
@@ -179,6 +184,34 @@ void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uin
   if (!amx_bf16_available()) throw std::logic_error("deconv2x2_fwd_bf16_amx: this CPU or OS gives no AMX-BF16");
 #if defined(YELAN_AMX_BUILT)
   amx_bf16_kernels.deconv2x2(d, x, w, bias, y);
+#else
+  (void)x; (void)w; (void)bias; (void)y;
+#endif
+}
+
+std::size_t deconv2x2_bf16_pairs_weight_halves(const DeconvShape& d) {
+  return std::size_t(4) * d.ocb() * d.icb() * kBlock * kBlock;
+}
+
+void pack_deconv2x2_bf16_pairs_weights(const DeconvShape& d, const float* w, std::uint16_t* out) {
+  std::memset(out, 0, deconv2x2_bf16_pairs_weight_halves(d) * sizeof(std::uint16_t));
+  const int OCB = d.ocb(), ICB = d.icb();
+  for (int i = 0; i < d.ic; ++i)
+    for (int o = 0; o < d.oc; ++o)
+      for (int phase = 0; phase < 4; ++phase) {
+        const std::size_t block = (std::size_t(phase) * OCB + o / kBlock) * ICB + i / kBlock;
+        out[block * kBlock * kBlock + bf16_tile_index(i % kBlock, o % kBlock)] =
+            to_bf16(w[(std::size_t(i) * d.oc + o) * 4 + phase]);
+      }
+}
+
+void deconv2x2_fwd_bf16_pairs(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias,
+                              float* y) {
+  if (!deconv2x2_bf16_applicable(d))
+    throw std::invalid_argument("deconv2x2_fwd_bf16_pairs: 2x2 stride-2 transposed convolutions without padding only");
+  if (!winograd_bf16_available()) throw std::logic_error("deconv2x2_fwd_bf16_pairs: this CPU gives no AVX512-BF16");
+#if defined(YELAN_WINOGRAD_BF16_BUILT)
+  winograd_bf16_kernels.deconv2x2(d, x, w, bias, y);
 #else
   (void)x; (void)w; (void)bias; (void)y;
 #endif

@@ -73,6 +73,10 @@ bool amx_bf16_enabled();
 // Weights: [36][OCB][ICB][8 pairs][16 oc][2] halves (bf16_tile_index within each block).
 bool winograd_bf16_available();  // built with AVX512-BF16, and the CPU and OS give AVX-512 and it
 bool winograd_bf16_enabled();    // available, and no narrower ISA forced (as amx_bf16_enabled)
+// Where a layer takes it: winograd_pays, and also few input channels into 16 or more outputs
+// (stage 1's first convolution, 6 -> 24): one input block's transform, the GEMMs a pair a
+// lane, against the direct fp32 kernel's 9 x ic FMAs a pixel and block.
+bool winograd_bf16_pays(const ConvShape& s);
 std::size_t winograd_bf16_weight_halves(const ConvShape& s);
 // From pack_winograd_weights' output (the fp32 transformed weights).
 void pack_winograd_bf16_weights(const ConvShape& s, const float* u_wino, std::uint16_t* out);
@@ -80,8 +84,17 @@ void pack_winograd_bf16_weights(const ConvShape& s, const float* u_wino, std::ui
 // std::logic_error otherwise), and winograd_applicable(s).
 void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint16_t* u_bf16, const float* bias,
                             float* y);
+// The U-Net's up-sampling in the same bf16 pairs (deconv2x2_bf16_applicable shapes): four
+// GEMMs over the input's pixels, one per output phase, where there is no AMX. Weights are
+// PyTorch's (in, out, 2, 2), packed as [4 phases][OCB][ICB][8 pairs][16 oc][2] halves; the
+// reference is deconv2x2_fwd_bf16_reference. winograd_bf16_available() must hold.
+std::size_t deconv2x2_bf16_pairs_weight_halves(const DeconvShape& d);
+void pack_deconv2x2_bf16_pairs_weights(const DeconvShape& d, const float* w_iohw, std::uint16_t* out);
+void deconv2x2_fwd_bf16_pairs(const DeconvShape& d, const float* x, const std::uint16_t* w_bf16, const float* bias,
+                              float* y);
 struct WinogradBf16Kernels {
   void (*fwd)(const ConvShape& s, const float* x, const std::uint16_t* u, const float* bias, float* y);
+  void (*deconv2x2)(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias, float* y);
 };
 
 // bf16 as AMX reads it: round to nearest even, subnormals to signed zero, NaN kept NaN.

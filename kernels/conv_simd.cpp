@@ -46,12 +46,12 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
         a.ntaps = 1;
         a.ncb = ICB;
         a.last_lanes = s.ic - (ICB - 1) * kBlock;
-        a.dst_r = kBlock;
-        a.dst_ob = cs;
+        a.dst_r = kWinoMTile;
+        a.dst_ob = kWinoMBlock;
         a.bias = nullptr;
         for (int t = 0; t < tc; t += tile_r) {
           a.src = V + wino_v_index(xi, 0, t, ICB);
-          a.dst = M + wino_m_index(xi, ob0, t, OCB);
+          a.dst = M + wino_m_index(xi, ob0, t);
           tiles[std::min(tile_r, tc - t) - 1](a);
         }
       }

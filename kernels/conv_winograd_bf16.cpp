@@ -1,5 +1,5 @@
-// Winograd F(4x4, 3x3) with its 36 GEMMs in bf16 pairs on AVX512-BF16 (conv_bf16.h says
-// why and the contract). Compiled with AVX-512 and AVX512-BF16 flags as an ISA variant of its
+// Winograd F(4x4, 3x3) with its 36 GEMMs in bf16 pairs on AVX512-BF16, and the U-Net's 2x2
+// up-sampling as four such GEMMs (conv_bf16.h says why and the contracts). Compiled with AVX-512 and AVX512-BF16 flags as an ISA variant of its
 // own (avx512bf16, 16 floats a vector) and called only where winograd_bf16_available() holds.
 // The transforms and the chunk loop are conv_winograd.inl's, shared with the fp32 kernel.
 #include <immintrin.h>
@@ -97,34 +97,52 @@ constexpr auto kGemm = gemm_table<false>(std::make_integer_sequence<int, kTileNB
 constexpr auto kGemmHalfLast = gemm_table<true>(std::make_integer_sequence<int, kTileNB>{});
 constexpr auto kGemmHalf = gemm_row<1, true>(std::make_integer_sequence<int, kHalfTileR>{});
 
+// A last output block of 8 channels or fewer runs on ymm.
+inline bool half_last_block(int oc) { return oc - ((oc + kBlock - 1) / kBlock - 1) * kBlock <= kBlock / 2; }
+
+// What every GEMM of one convolution shares: V as [ICB][chunk][16] halves, U as [OCB][ICB]
+// blocks of 16 x 16, M's strides to the next tile and the next output block.
+GemmArgs channel_gemm(int ic, int chunk, std::ptrdiff_t dst_r, std::ptrdiff_t dst_ob) {
+  const int icb = (ic + kBlock - 1) / kBlock;
+  GemmArgs a;
+  a.src_r = kBlock / 2;
+  a.src_cb = std::ptrdiff_t(chunk) * kBlock / 2;
+  a.w_cb = kBlock * kBlock;
+  a.w_ob = std::ptrdiff_t(icb) * kBlock * kBlock;
+  a.ncb = icb;
+  a.last_pairs = (ic - (icb - 1) * kBlock + 1) / 2;  // an odd channel pairs with a zero lane
+  a.dst_r = dst_r;
+  a.dst_ob = dst_ob;
+  return a;
+}
+
+// Rows of output blocks for one product: tiles of kTileR pixels x up to kTileNB blocks, the
+// last block half where HALF_LAST (as conv_fwd_winograd_bf16's 36 products do).
+void gemm_blocks(GemmArgs a, const std::uint16_t* w, int ocb, int icb, bool half_last, int tc, const bf16_pair* src,
+                 float* dst) {
+  for (int ob0 = 0; ob0 < ocb; ob0 += kTileNB) {
+    const int nb = std::min(kTileNB, ocb - ob0);
+    const bool half = ob0 + nb == ocb && half_last;
+    const int tile_r = half && nb == 1 ? kHalfTileR : kTileR;
+    const GemmFn* tiles = !half ? kGemm[nb - 1].data() : nb == 1 ? kGemmHalf.data() : kGemmHalfLast[nb - 1].data();
+    a.w = w + std::ptrdiff_t(ob0) * icb * kBlock * kBlock;
+    for (int t = 0; t < tc; t += tile_r) {
+      a.src = src + t * a.src_r;
+      a.dst = dst + ob0 * a.dst_ob + t * a.dst_r;
+      tiles[std::min(tile_r, tc - t) - 1](a);
+    }
+  }
+}
+
 void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint16_t* u, const float* bias, float* y) {
   const int ICB = s.icb(), OCB = s.ocb();
-  const bool half_last = s.oc - (OCB - 1) * kBlock <= kBlock / 2;
-  const int last_pairs = (s.ic - (ICB - 1) * kBlock + 1) / 2;  // an odd channel pairs with a zero lane
+  const bool half_last = half_last_block(s.oc);
+  const GemmArgs args = channel_gemm(s.ic, kWinoChunk, kWinoMTile, kWinoMBlock);
   const auto gemm = [&](const std::uint16_t* V, float* M, int tc) {
     const auto* words = reinterpret_cast<const bf16_pair*>(V);
     for (int xi = 0; xi < 36; ++xi)
-      for (int ob0 = 0; ob0 < OCB; ob0 += kTileNB) {
-        const int nb = std::min(kTileNB, OCB - ob0);
-        const bool half = ob0 + nb == OCB && half_last;
-        const int tile_r = half && nb == 1 ? kHalfTileR : kTileR;
-        const GemmFn* tiles = !half ? kGemm[nb - 1].data() : nb == 1 ? kGemmHalf.data() : kGemmHalfLast[nb - 1].data();
-        GemmArgs a;
-        a.src_r = kBlock / 2;
-        a.src_cb = std::ptrdiff_t(kWinoChunk) * kBlock / 2;
-        a.w = u + (std::ptrdiff_t(xi) * OCB + ob0) * ICB * kBlock * kBlock;
-        a.w_cb = kBlock * kBlock;
-        a.w_ob = std::ptrdiff_t(ICB) * kBlock * kBlock;
-        a.ncb = ICB;
-        a.last_pairs = last_pairs;
-        a.dst_r = kBlock;
-        a.dst_ob = std::ptrdiff_t(kWinoChunk) * kBlock;
-        for (int t = 0; t < tc; t += tile_r) {
-          a.src = words + wino_v_index(xi, 0, t, ICB) / 2;
-          a.dst = M + wino_m_index(xi, ob0, t, OCB);
-          tiles[std::min(tile_r, tc - t) - 1](a);
-        }
-      }
+      gemm_blocks(args, u + std::ptrdiff_t(xi) * OCB * ICB * kBlock * kBlock, OCB, ICB, half_last, tc,
+                  words + wino_v_index(xi, 0, 0, ICB) / 2, M + wino_m_index(xi, 0, 0));
   };
   // VCVTNEPS2BF16 rounds to nearest even and flushes subnormals to zero, as to_bf16 does.
   const auto store_v = [](std::uint16_t* at, vf v) {
@@ -133,9 +151,58 @@ void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint1
   winograd_fwd<std::uint16_t>(s, x, bias, y, store_v, gemm);
 }
 
+// The U-Net's 2x2 stride-2 up-sampling: per output phase (dy, dx) a 1x1 convolution of the
+// input, so four GEMMs over a chunk of input pixels (rounded to bf16 once, read by all four),
+// each result stored with its bias at (2h + dy, 2w + dx). Weights [4][OCB][ICB][8 pairs][16][2].
+constexpr int kUpChunk = 96;  // input pixels: 16 tiles of 6; V and M of the widest up in L2
+
+void deconv2x2_fwd_bf16_pairs(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias,
+                              float* y) {
+  const int ICB = d.icb(), OCB = d.ocb(), W = d.iw, OW = d.ow(), P = d.ih * d.iw;
+  const bool half_last = half_last_block(d.oc);
+  const GemmArgs a = channel_gemm(d.ic, kUpChunk, kBlock, std::ptrdiff_t(kUpChunk) * kBlock);
+  const int chunks = (P + kUpChunk - 1) / kUpChunk;
+  const std::ptrdiff_t x_plane = std::ptrdiff_t(P) * kBlock, y_plane = std::ptrdiff_t(d.oh()) * OW * kBlock;
+  const std::size_t cs = std::size_t(kUpChunk) * kBlock;
+  on_team(worth_sharing(d.as_conv().flops()), [&] {
+    float* scratch = thread_scratch(std::size_t(ICB) * cs / 2 + std::size_t(4) * OCB * cs);
+    std::uint16_t* V = reinterpret_cast<std::uint16_t*>(scratch);  // [ICB][chunk][16] halves
+    float* M = scratch + std::size_t(ICB) * cs / 2;                 // [4][OCB][chunk][16]
+#pragma omp for collapse(2) schedule(static)
+    for (int n = 0; n < d.n; ++n)
+      for (int ch = 0; ch < chunks; ++ch) {
+        const int p0 = ch * kUpChunk, tc = std::min(kUpChunk, P - p0);
+        for (int cb = 0; cb < ICB; ++cb) {  // a chunk of a plane is contiguous
+          const float* xs = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane + std::ptrdiff_t(p0) * kBlock;
+          std::uint16_t* v = V + std::ptrdiff_t(cb) * cs;
+          for (int t = 0; t < tc; ++t)
+            _mm256_storeu_si256(reinterpret_cast<__m256i*>(v + t * kBlock),
+                                (__m256i)_mm512_cvtneps_pbh(_mm512_loadu_ps(xs + t * kBlock)));
+        }
+        const auto* words = reinterpret_cast<const bf16_pair*>(V);
+        for (int phase = 0; phase < 4; ++phase)
+          gemm_blocks(a, w + std::ptrdiff_t(phase) * OCB * ICB * kBlock * kBlock, OCB, ICB, half_last, tc, words,
+                      M + std::ptrdiff_t(phase) * OCB * cs);
+        for (int ob = 0; ob < OCB; ++ob) {
+          const __m512 b = bias ? _mm512_loadu_ps(bias + ob * kBlock) : _mm512_setzero_ps();
+          float* yb = y + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
+          for (int t = 0; t < tc; ++t) {
+            const int h = (p0 + t) / W, x0 = (p0 + t) % W;
+            for (int phase = 0; phase < 4; ++phase) {
+              const float* m = M + (std::ptrdiff_t(phase) * OCB + ob) * cs + t * kBlock;
+              float* at = yb + (std::ptrdiff_t(2 * h + phase / 2) * OW + 2 * x0 + phase % 2) * kBlock;
+              _mm512_storeu_ps(at, _mm512_add_ps(_mm512_loadu_ps(m), b));
+            }
+          }
+        }
+      }
+  });
+}
+
 }  // namespace
 }  // namespace yelan::kernels::YELAN_VARIANT_ISA
 
 namespace yelan::kernels {
-extern const WinogradBf16Kernels winograd_bf16_kernels{YELAN_VARIANT_ISA::conv_fwd_winograd_bf16};
+extern const WinogradBf16Kernels winograd_bf16_kernels{YELAN_VARIANT_ISA::conv_fwd_winograd_bf16,
+                                                       YELAN_VARIANT_ISA::deconv2x2_fwd_bf16_pairs};
 }

@@ -54,8 +54,8 @@ bool takes_bf16(const kernels::ConvShape& s) {
   return bf16_path() == Bf16Path::amx && s.kh * s.kw > 1 && kernels::conv_bf16_applicable(s);
 }
 
-bool takes_bf16(const kernels::DeconvShape& d) {
-  return bf16_path() == Bf16Path::amx && kernels::deconv2x2_bf16_applicable(d);
+Bf16Path up_bf16_path(const kernels::DeconvShape& d) {
+  return kernels::deconv2x2_bf16_applicable(d) ? bf16_path() : Bf16Path::none;
 }
 
 std::vector<ConvRecord>*& conv_trace() {
@@ -167,14 +167,19 @@ void Conv2d::check_io(const Act& x, const Act& y) const {
 void Conv2d::forward(const Act& x, const Act& y, bool winograd) {
   check_io(x, y);
   pack(conv_shape(x));
-  if (spec_.transposed && !grad_enabled() && takes_bf16(deconv_shape(x))) {
+  const Bf16Path up = spec_.transposed && !grad_enabled() ? up_bf16_path(deconv_shape(x)) : Bf16Path::none;
+  if (up != Bf16Path::none) {
     const kernels::DeconvShape d = deconv_shape(x);
-    if (up_bf16_.empty()) {
-      up_bf16_.resize(kernels::deconv2x2_bf16_weight_halves(d));
-      kernels::pack_deconv2x2_bf16_weights(d, weight.value.data(), up_bf16_.data());
+    const bool amx = up == Bf16Path::amx;
+    if (up_bf16_.empty() || up_bf16_layout_ != up) {
+      up_bf16_.resize(amx ? kernels::deconv2x2_bf16_weight_halves(d) : kernels::deconv2x2_bf16_pairs_weight_halves(d));
+      (amx ? kernels::pack_deconv2x2_bf16_weights : kernels::pack_deconv2x2_bf16_pairs_weights)(
+          d, weight.value.data(), up_bf16_.data());
+      up_bf16_layout_ = up;
     }
     record(x, y, conv_shape(x));
-    kernels::deconv2x2_fwd_bf16_amx(d, x.data, up_bf16_.data(), bias ? bias16_.data() : nullptr, y.data);
+    (amx ? kernels::deconv2x2_fwd_bf16_amx : kernels::deconv2x2_fwd_bf16_pairs)(
+        d, x.data, up_bf16_.data(), bias ? bias16_.data() : nullptr, y.data);
     return;
   }
   run_forward(x, y, spec_.transposed ? bwd_.data() : fwd_.data(), wino_.size() ? wino_.data() : nullptr,
@@ -223,7 +228,7 @@ void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, cons
     kernels::conv_fwd_bf16_amx(s, x.data, fold_bf16_.data(), fold_bias16_.data(), y.data);
     return;
   }
-  if (winograd && fold_wino_.size() && winograd_allowed() && kernels::winograd_pays(s) &&
+  if (winograd && fold_wino_.size() && winograd_allowed() && kernels::winograd_bf16_pays(s) &&
       bf16_path() == Bf16Path::winograd) {
     if (fold_wino_bf16_.empty()) {
       fold_wino_bf16_.resize(kernels::winograd_bf16_weight_halves(s));

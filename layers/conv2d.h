@@ -51,7 +51,9 @@ Bf16Path bf16_path_if(bool on);  // which of them a network with bf16 `on` takes
 const char* bf16_path_name(Bf16Path p);  // "fp32", "bf16 on AMX", "bf16 Winograd on AVX512-BF16"
 // Whether a forward_folded of this shape takes the AMX path now (bf16_path, the shape).
 bool takes_bf16(const kernels::ConvShape& s);
-bool takes_bf16(const kernels::DeconvShape& d);  // the 2x2/2 up-sampling, under NoGrad
+// Which bf16 kernel the 2x2/2 up-sampling takes under NoGrad: AMX tiles, the bf16 pairs
+// where the path is Winograd on AVX512-BF16 (Bf16Path::winograd), or none (fp32).
+Bf16Path up_bf16_path(const kernels::DeconvShape& d);
 
 // One Conv2d forward as `yelan model summary` lists it: which layer (its weight, whose key
 // the caller's ParamList knows), the shapes in and out, and the multiply-add FLOPs.
@@ -102,6 +104,7 @@ class Conv2d {
   std::vector<std::uint16_t> fold_bf16_;  // the folded weights for the bf16 kernel, once it is asked for
   std::vector<std::uint16_t> fold_wino_bf16_;  // fold_wino_ in bf16 pairs, once the bf16 Winograd asks
   std::vector<std::uint16_t> up_bf16_;    // a 2x2/2 transposed conv's, packed on its first bf16 forward
+  Bf16Path up_bf16_layout_ = Bf16Path::none;  // which kernel's layout up_bf16_ holds
   kernels::ConvShape conv_shape(const Act& x) const;   // the kernel's conv (for a deconv: its adjoint)
   kernels::DeconvShape deconv_shape(const Act& x) const;
   void pack(const kernels::ConvShape& s);

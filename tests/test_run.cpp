@@ -1368,12 +1368,21 @@ TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX or AVX512-BF
     o.mask_max_age = max_age;
     return yelan::run::evaluate_recordings(w, recs, 0.6, 0.1, o, progress, true);
   };
-  // The shipped default: bf16 and a cap of 3 where the CPU has AMX, bf16 Winograd and a cap of
-  // 4 where it has AVX512-BF16 alone, else fp32 and its cap of 6.
+  // The shipped default: bf16 and a cap of 3 where the CPU has AMX or AVX512-BF16 alone (AMX
+  // tiles, or Winograd in bf16 pairs), else fp32 and its cap of 6.
   const auto model = run(std::nullopt, std::nullopt);
   CHECK(model.stage1_bf16 == (amx || wino));
   CHECK(model.stage1_precision == yelan::layers::bf16_path_name(path));
-  CHECK(model.mask_max_age == (amx ? 3 : wino ? 4 : 6));
+  CHECK(model.mask_max_age == (amx || wino ? 3 : 6));
+  {  // Each path takes its own key: the same file with the two bf16 caps set apart.
+    yelan::weights::Weights apart = yelan::weights::load_weights(w);
+    apart.config_json = yelan::with_run_setting(yelan::with_run_setting(apart.config_json, "mask_max_age_bf16", "5"),
+                                                "mask_max_age_bf16_winograd", "4");
+    yelan::weights::save_weights(d / "apart.h5", apart);
+    yelan::run::RunOptions o;
+    const auto r = yelan::run::evaluate_recordings(d / "apart.h5", recs, 0.6, 0.1, o, progress, true);
+    CHECK(r.mask_max_age == (amx ? 5 : wino ? 4 : 6));
+  }
   const auto fp32 = run(false, std::nullopt);
   CHECK_FALSE(fp32.stage1_bf16);
   CHECK(fp32.stage1_precision == "fp32");

@@ -160,16 +160,18 @@ TEST_CASE("conv_bf16 stays within bf16's rounding of the fp32 convolution", "[co
   check_rounded_fp32(y, ref, 48.0 * 9, std::ldexp(1.0, -8));
 }
 
-TEST_CASE("the 2x2/2 transposed convolution in bf16 on AMX equals its bf16 reference", "[conv_bf16]") {
-  yelan::test::amx_or_skip();
+struct DeconvCase {
+  int n, ic, ih, iw, oc;
+};
+
+// A bf16 up-sampling kernel (pack, then run) against deconv2x2_fwd_bf16_reference: both see
+// the same rounded operands, so only the order of the fp32 sums differs.
+template <class Halves, class Pack, class Run>
+void check_deconv2x2_bf16(const std::vector<DeconvCase>& cases, Halves halves, Pack pack, Run run) {
   DeconvShape d;
   d.kh = d.kw = 2;
   d.stride = 2;
-  struct C {
-    int n, ic, ih, iw, oc;
-  };
-  // the U-Net's ups (384->192 at 8x10, 48->24 over many rows), odd channels, a 1x1 input, a batch of 2
-  for (const C& c : {C{1, 384, 8, 10, 192}, C{1, 48, 33, 43, 24}, C{1, 40, 5, 7, 20}, C{1, 16, 1, 1, 8}, C{2, 24, 6, 9, 40}}) {
+  for (const DeconvCase& c : cases) {
     INFO("n " << c.n << " ic " << c.ic << " " << c.ih << "x" << c.iw << " oc " << c.oc);
     d.n = c.n; d.ic = c.ic; d.ih = c.ih; d.iw = c.iw; d.oc = c.oc;
     const auto x = random_floats(std::size_t(c.n) * c.ic * c.ih * c.iw, 3 + c.ic);
@@ -178,15 +180,55 @@ TEST_CASE("the 2x2/2 transposed convolution in bf16 on AMX equals its bf16 refer
     const auto b = random_floats(std::size_t(c.oc), 2);
     std::copy(b.begin(), b.end(), bias.begin());
     const auto xb = to_blocked(x, c.n, c.ic, c.ih, c.iw);
-    std::vector<std::uint16_t> wp(deconv2x2_bf16_weight_halves(d));
-    pack_deconv2x2_bf16_weights(d, w.data(), wp.data());
+    std::vector<std::uint16_t> wp(halves(d));
+    pack(d, w.data(), wp.data());
     const std::size_t ny = std::size_t(c.n) * ((c.oc + 15) / 16) * d.oh() * d.ow() * kBlock;
     std::vector<float> y(ny, -7.f), ref(ny);
-    deconv2x2_fwd_bf16_amx(d, xb.data(), wp.data(), bias.data(), y.data());
+    run(d, xb.data(), wp.data(), bias.data(), y.data());
     deconv2x2_fwd_bf16_reference(d, xb.data(), w.data(), bias.data(), ref.data());
     CHECK(padding_is_zero(y, c.n, c.oc, d.oh(), d.ow()));
     for (std::size_t i = 0; i < ny; ++i) REQUIRE(std::fabs(double(y[i]) - ref[i]) <= 2e-6 * c.ic);
   }
+}
+
+TEST_CASE("the 2x2/2 transposed convolution in bf16 on AMX equals its bf16 reference", "[conv_bf16]") {
+  yelan::test::amx_or_skip();
+  // the U-Net's ups (384->192 at 8x10, 48->24 over many rows), odd channels, a 1x1 input, a batch of 2
+  check_deconv2x2_bf16({{1, 384, 8, 10, 192}, {1, 48, 33, 43, 24}, {1, 40, 5, 7, 20}, {1, 16, 1, 1, 8}, {2, 24, 6, 9, 40}},
+                       deconv2x2_bf16_weight_halves, pack_deconv2x2_bf16_weights, deconv2x2_fwd_bf16_amx);
+}
+
+TEST_CASE("the 2x2/2 transposed convolution in bf16 pairs on AVX512-BF16 equals its bf16 reference", "[conv_bf16]") {
+  yelan::test::winograd_bf16_or_skip();
+  // The U-Net's four ups (12 output blocks: three groups of four; 24 outputs: a half block
+  // alone), an odd input count (a pair half padding), 40 outputs (a half block after full
+  // ones), chunks of 96 pixels with a remainder, rows that cross chunks, a 1x1 input, a batch.
+  check_deconv2x2_bf16({{1, 384, 8, 10, 192},
+                        {1, 192, 16, 21, 96},
+                        {1, 96, 32, 43, 48},
+                        {1, 48, 65, 86, 24},
+                        {1, 37, 11, 13, 40},
+                        {1, 16, 1, 1, 8},
+                        {2, 24, 6, 9, 40},
+                        {1, 70, 7, 15, 72}},
+                       deconv2x2_bf16_pairs_weight_halves, pack_deconv2x2_bf16_pairs_weights,
+                       deconv2x2_fwd_bf16_pairs);
+}
+
+TEST_CASE("the bf16 pairs' up-sampling refuses other shapes, and CPUs without AVX512-BF16", "[conv_bf16]") {
+  DeconvShape d;
+  d.kh = d.kw = 2;
+  d.stride = 2;
+  d.ic = 16; d.ih = 4; d.iw = 4; d.oc = 16;
+  std::vector<float> x(16 * 16), y(16 * 64);
+  std::vector<std::uint16_t> w(deconv2x2_bf16_pairs_weight_halves(d));
+  DeconvShape padded = d;
+  padded.pad_h = padded.pad_w = 1;
+  CHECK_THROWS_AS(deconv2x2_fwd_bf16_pairs(padded, x.data(), w.data(), nullptr, y.data()), std::invalid_argument);
+  if (!winograd_bf16_available())
+    CHECK_THROWS_AS(deconv2x2_fwd_bf16_pairs(d, x.data(), w.data(), nullptr, y.data()), std::logic_error);
+  else
+    CHECK_NOTHROW(deconv2x2_fwd_bf16_pairs(d, x.data(), w.data(), nullptr, y.data()));
 }
 
 TEST_CASE("Winograd in bf16 on AVX512-BF16 equals its bf16 reference on odd shapes, with bias and fused ReLU", "[conv_bf16][winograd]") {
