@@ -82,7 +82,8 @@ class Conv2d {
   // Output geometry for an input (data left null).
   Act out_shape(const Act& x) const;
   // y must have out_shape(x)'s size. Winograd only where applicable (3x3/1) and asked for.
-  // A 2x2/2 transposed conv under NoGrad and bf16_convs runs in bf16 on AMX where the CPU has it.
+  // A 2x2/2 transposed conv under NoGrad and bf16_convs runs in bf16 (up_bf16_path: AMX tiles,
+  // or bf16 pairs on AVX512-BF16).
   void forward(const Act& x, const Act& y, bool winograd = false);
   // Inference through a per-output-channel affine folded into the weights and bias (an
   // eval-mode BatchNorm after this conv): y = scale * conv(x) + shift in one pass. The folded

@@ -411,4 +411,18 @@ TEST_CASE("a 2x2/2 transposed Conv2d under NoGrad and Bf16Convs runs in bf16 (AM
   }
   CHECK(differ > y.mem.size() / 4);
   CHECK(worst / scale < 2e-2);
+  // New weights reach the bf16 kernel: init calls weights_changed, which repacks it.
+  up.init(5);
+  Owned z(shape), zb(shape);
+  up.forward(x.act, z.act);
+  {
+    const Bf16Convs on(true);
+    up.forward(x.act, zb.act);
+  }
+  double zworst = 0, zscale = 1e-6;
+  for (std::size_t i = 0; i < z.mem.size(); ++i) {
+    zworst = std::max(zworst, double(std::fabs(zb.mem[i] - z.mem[i])));
+    zscale = std::max(zscale, double(std::fabs(z.mem[i])));
+  }
+  CHECK(zworst / zscale < 2e-2);
 }

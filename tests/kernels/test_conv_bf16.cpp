@@ -200,8 +200,8 @@ TEST_CASE("the 2x2/2 transposed convolution in bf16 on AMX equals its bf16 refer
 
 TEST_CASE("the 2x2/2 transposed convolution in bf16 pairs on AVX512-BF16 equals its bf16 reference", "[conv_bf16]") {
   yelan::test::winograd_bf16_or_skip();
-  // The U-Net's four ups (12 output blocks: three groups of four; 24 outputs: a half block
-  // alone), an odd input count (a pair half padding), 40 outputs (a half block after full
+  // The U-Net's four ups (12 output blocks: three groups of four; 24 outputs: a full block and
+  // a half), half blocks alone (8 and 72 outputs), an odd input count (a pair half padding), 40 outputs (a half block after full
   // ones), chunks of 96 pixels with a remainder, rows that cross chunks, a 1x1 input, a batch.
   check_deconv2x2_bf16({{1, 384, 8, 10, 192},
                         {1, 192, 16, 21, 96},
@@ -238,7 +238,7 @@ TEST_CASE("Winograd in bf16 on AVX512-BF16 equals its bf16 reference on odd shap
   const Case cases[] = {
       {1, 24, 13, 17, 24, 3, 1}, {1, 16, 9, 21, 24, 3, 1}, {1, 48, 8, 10, 48, 3, 1},  {2, 40, 7, 5, 40, 3, 1},
       {1, 17, 11, 12, 33, 3, 1}, {1, 3, 2, 3, 5, 3, 1},    {1, 96, 16, 21, 96, 3, 1}, {1, 64, 33, 43, 72, 3, 0},
-      {1, 9, 30, 31, 8, 3, 1},   {1, 384, 8, 10, 192, 3, 1},
+      {1, 9, 30, 31, 8, 3, 1},   {1, 384, 8, 10, 192, 3, 1}, {1, 6, 19, 23, 24, 3, 1},
   };
   double worst = 0;
   for (const Case& c : cases)
@@ -291,6 +291,18 @@ TEST_CASE("Winograd in bf16 stays within bf16's rounding of the fp32 convolution
   conv_scalar.fwd(s, xb.data(), wf.data(), nullptr, ref.data());
   const double worst = check_rounded_fp32(y, ref, 48.0 * 9, std::ldexp(1.0, -7));
   WARN("Winograd bf16 worst error against the fp32 convolution, relative to ic k k: " << worst);
+}
+
+TEST_CASE("Winograd in bf16 is taken where fp32 Winograd pays, and for few channels into 16 or more on 24 tiles", "[conv_bf16][winograd]") {
+  CHECK(winograd_bf16_pays(shape_of({1, 6, 130, 173, 24, 3, 1}, false)));  // stage 1's first
+  CHECK(winograd_bf16_pays(shape_of({1, 6, 24, 16, 16, 3, 1}, false)));    // 6 x 4 tiles
+  CHECK_FALSE(winograd_bf16_pays(shape_of({1, 6, 20, 16, 16, 3, 1}, false)));  // 5 x 4
+  CHECK_FALSE(winograd_bf16_pays(shape_of({1, 6, 24, 16, 15, 3, 1}, false)));  // 15 outputs
+  CHECK(winograd_bf16_pays(shape_of({1, 64, 8, 8, 64, 3, 1}, false)));     // winograd_pays: wide
+  CHECK_FALSE(winograd_bf16_pays(shape_of({1, 32, 8, 8, 32, 3, 1}, false)));  // neither
+  ConvShape strided = shape_of({1, 6, 48, 48, 24, 3, 1}, false);
+  strided.stride = 2;
+  CHECK_FALSE(winograd_bf16_pays(strided));
 }
 
 TEST_CASE("Winograd in bf16 refuses shapes it does not compute, and CPUs without AVX512-BF16", "[conv_bf16][winograd]") {
