@@ -64,7 +64,7 @@ bool amx_bf16_enabled();
 
 // Winograd F(4x4, 3x3) with its GEMMs in bf16, for CPUs with AVX512-BF16 and no AMX (AMD Zen
 // 4 and 5). VDPBF16PS does two multiply-adds a lane where VFMADD231PS does one, and on Zen 5
-// issues at 0.9 of its rate: 1.8x the fp32 GEMMs, which are 57% of stage 1 in fp32. The
+// issues at its rate over 24 chains: 2x the fp32 GEMMs, which are 57% of stage 1 in fp32. The
 // transforms stay fp32; each transformed input is rounded to bf16 once (the input transform's
 // store), the transformed weights once when packed (from pack_winograd_weights' fp32, made
 // in double). Winograd's transformed values run larger than the inputs, but rounding is

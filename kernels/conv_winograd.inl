@@ -42,6 +42,9 @@ constexpr std::ptrdiff_t kWinoMTile = 36 * kBlock;                  // M: to the
 constexpr std::ptrdiff_t kWinoMBlock = kWinoChunk * kWinoMTile;     // M: to the next output block
 inline std::ptrdiff_t wino_m_index(int xi, int ob, int t) { return ob * kWinoMBlock + t * kWinoMTile + xi * kBlock; }
 
+// The transforms' fixed-count loops are unrolled by pragma: -O2 kept them loops, so the 6x6
+// tiles lived on the stack with an index multiply per access, and the transforms took half
+// of a bf16 Winograd convolution on stage 1's shapes (about a quarter once unrolled).
 template <class T, class StoreV, class Gemm>
 void winograd_fwd(const ConvShape& s, const float* x, const float* bias, float* y, StoreV store_v, Gemm gemm) {
   const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb();
@@ -65,14 +68,19 @@ void winograd_fwd(const ConvShape& s, const float* x, const float* bias, float* 
             const int ih0 = (t0 + t) / TW * 4 - s.pad_h, iw0 = (t0 + t) % TW * 4 - s.pad_w;
             // Most tiles lie inside the image: their 36 loads need no test.
             const bool inside = ih0 >= 0 && iw0 >= 0 && ih0 + 6 <= s.ih && iw0 + 6 <= s.iw;
+#pragma GCC unroll 6
             for (int q = 0; q < kWinoNV; ++q) {
               vf d[6][6], r[6][6];
               if (inside) {
                 const float* p = xb + (std::ptrdiff_t(ih0) * s.iw + iw0) * kBlock + q * VL;
+#pragma GCC unroll 6
                 for (int i = 0; i < 6; ++i)
+#pragma GCC unroll 6
                   for (int j = 0; j < 6; ++j) d[i][j] = loadf(p + (std::ptrdiff_t(i) * s.iw + j) * kBlock);
               } else {
+#pragma GCC unroll 6
                 for (int i = 0; i < 6; ++i)
+#pragma GCC unroll 6
                   for (int j = 0; j < 6; ++j) {
                     const int ih = ih0 + i, iw = iw0 + j;
                     d[i][j] = ih >= 0 && ih < s.ih && iw >= 0 && iw < s.iw
@@ -80,15 +88,20 @@ void winograd_fwd(const ConvShape& s, const float* x, const float* bias, float* 
                                   : vf{};
                   }
               }
+#pragma GCC unroll 6
               for (int j = 0; j < 6; ++j) {  // columns: r[.][j] = B^T d[.][j]
                 vf col[6], out[6];
+#pragma GCC unroll 6
                 for (int i = 0; i < 6; ++i) col[i] = d[i][j];
                 wino_bt(col, out);
+#pragma GCC unroll 6
                 for (int i = 0; i < 6; ++i) r[i][j] = out[i];
               }
+#pragma GCC unroll 6
               for (int i = 0; i < 6; ++i) {  // rows: (B^T d) B
                 vf out[6];
                 wino_bt(r[i], out);
+#pragma GCC unroll 6
                 for (int j = 0; j < 6; ++j) store_v(V + wino_v_index(i * 6 + j, cb, t, ICB) + q * VL, out[j]);
               }
             }
@@ -101,24 +114,33 @@ void winograd_fwd(const ConvShape& s, const float* x, const float* bias, float* 
           float* yb = y + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
           for (int t = 0; t < tc; ++t) {
             const int oh0 = (t0 + t) / TW * 4, ow0 = (t0 + t) % TW * 4;
+#pragma GCC unroll 6
             for (int q = 0; q < kWinoNV; ++q) {
               const vf b = bias ? loadf(bias + ob * kBlock + q * VL) : vf{};
               vf r[4][6];
+#pragma GCC unroll 6
               for (int j = 0; j < 6; ++j) {
                 vf col[6], out[4];
+#pragma GCC unroll 6
                 for (int i = 0; i < 6; ++i) col[i] = loadf(M + wino_m_index(i * 6 + j, ob, t) + q * VL);
                 // Every output of A^T m takes m[1] with coefficient 1, so the bias added at
                 // m[1][1] reaches all 16 outputs: one addition instead of 16.
                 if (j == 1) col[1] = col[1] + b;
                 wino_at(col, out);
+#pragma GCC unroll 4
                 for (int i = 0; i < 4; ++i) r[i][j] = out[i];
               }
-              for (int i = 0; i < 4 && oh0 + i < OH; ++i) {
+              // The clip is a predicate on each store, not a loop bound, so both passes
+              // unroll (a bound the compiler cannot count kept A^T's row pass a loop).
+              const int ni = std::min(4, OH - oh0), nj = std::min(4, OW - ow0);
+              float* yt = yb + (std::ptrdiff_t(oh0) * OW + ow0) * kBlock + q * VL;
+#pragma GCC unroll 4
+              for (int i = 0; i < 4; ++i) {
                 vf out[4];
                 wino_at(r[i], out);
-                for (int j = 0; j < 4 && ow0 + j < OW; ++j)
-                  storef(yb + (std::ptrdiff_t(oh0 + i) * OW + ow0 + j) * kBlock + q * VL,
-                         s.relu ? vmax(out[j], vf{}) : out[j]);
+#pragma GCC unroll 4
+                for (int j = 0; j < 4; ++j)
+                  if (i < ni && j < nj) storef(yt + (std::ptrdiff_t(i) * OW + j) * kBlock, s.relu ? vmax(out[j], vf{}) : out[j]);
               }
             }
           }

@@ -186,12 +186,15 @@ void deconv2x2_fwd_bf16_pairs(const DeconvShape& d, const float* x, const std::u
         for (int ob = 0; ob < OCB; ++ob) {
           const __m512 b = bias ? _mm512_loadu_ps(bias + ob * kBlock) : _mm512_setzero_ps();
           float* yb = y + (std::ptrdiff_t(n) * OCB + ob) * y_plane;
-          for (int t = 0; t < tc; ++t) {
-            const int h = (p0 + t) / W, x0 = (p0 + t) % W;
+          for (int t = 0, h = p0 / W, x0 = p0 % W; t < tc; ++t) {  // input pixel p0 + t is (h, x0)
             for (int phase = 0; phase < 4; ++phase) {
               const float* m = M + (std::ptrdiff_t(phase) * OCB + ob) * cs + t * kBlock;
               float* at = yb + (std::ptrdiff_t(2 * h + phase / 2) * OW + 2 * x0 + phase % 2) * kBlock;
               _mm512_storeu_ps(at, _mm512_add_ps(_mm512_loadu_ps(m), b));
+            }
+            if (++x0 == W) {
+              x0 = 0;
+              ++h;
             }
           }
         }

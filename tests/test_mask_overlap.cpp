@@ -2,10 +2,16 @@
 // sensor's pixels, counted by hand on a shifted square with two false cells far from it.
 #include <catch2/catch.hpp>
 
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
 #include "engine/train/mask_overlap.h"
 
 using yelan::train::MaskOverlap;
 using yelan::train::add_mask_overlap;
+using yelan::train::measured_iou;
 
 TEST_CASE("mask overlap: the IoU, and the IoU off the true outline's edge", "[train]") {
   const int mh = 5, mw = 6, down = 2, sw = mw * down;
@@ -53,4 +59,28 @@ TEST_CASE("mask overlap: the IoU, and the IoU off the true outline's edge", "[tr
   CHECK(none.iou() == 0);
   CHECK(none.iou_off_edge() == 0);
   CHECK(none.iou_px() == 0);
+}
+
+TEST_CASE("mask overlap: a key with no dancer pixel and no kept one has no IoU", "[train]") {
+  const int mh = 3, mw = 4, down = 2, sw = mw * down;
+  std::vector<std::uint8_t> truth(std::size_t(mh * down * sw), 0);
+  std::vector<float> keep(std::size_t(mh * mw), 0.f);
+  std::map<std::string, MaskOverlap> by;
+  // "hidden": the dancer wholly behind furniture, and stage 1 keeps nothing.
+  add_mask_overlap(by["hidden"], truth.data(), sw, keep.data(), mh, mw, down);
+  // "seen": one true cell at its centre pixel, kept; "missed": a true cell, nothing kept.
+  truth[std::size_t(1 * sw + 1)] = 1;
+  add_mask_overlap(by["missed"], truth.data(), sw, keep.data(), mh, mw, down);
+  keep[0] = 1.f;
+  add_mask_overlap(by["seen"], truth.data(), sw, keep.data(), mh, mw, down);
+  const auto cells = measured_iou(by);
+  CHECK(cells.count("hidden") == 0);
+  REQUIRE(cells.count("missed") == 1);
+  CHECK(cells.at("missed") == 0);
+  REQUIRE(cells.count("seen") == 1);
+  CHECK(cells.at("seen") == Approx(1.0));
+  const auto px = measured_iou(by, true);
+  CHECK(px.count("hidden") == 0);
+  CHECK(px.at("missed") == 0);
+  CHECK(px.at("seen") == Approx(1.0 / 4.0));  // one true pixel of the kept cell's four
 }

@@ -257,6 +257,17 @@ std::vector<float> flipped(std::vector<float> v, const layers::Act& shape) {
   return v;
 }
 float logit(float p) { return std::log(p / (1.f - p)); }
+// The cropped mask net's frames: 64 x 1024 with events left of column 640 (x), and the same
+// emptied from column 512 on (inside: the frame as a box of columns 0-511 sees it).
+struct WideFrames {
+  yelan::test::Owned x{1, 6, 64, 1024, 3}, inside{1, 6, 64, 1024, 3};
+  WideFrames() {
+    x.for_each_real([&](std::size_t i) {
+      if ((i / 16) % 1024 >= 640) x.mem[i] = 0.f;
+    });
+    inside.for_each_real([&](std::size_t i) { inside.mem[i] = (i / 16) % 1024 >= 512 ? 0.f : x.mem[i]; });
+  }
+};
 }  // namespace
 
 TEST_CASE("mask net with run.mask_mirror: under NoGrad the mean of the net on x and on x mirrored, and a mirrored x mirrors its masks",
@@ -353,11 +364,9 @@ TEST_CASE("mask net forward_cropped: the frame's masks where the frame is empty 
   MaskNet net(cfg);
   net.init(5);
   net.set_training(false);
-  yelan::test::Owned x(1, 6, 64, 1024, 3), inside(1, 6, 64, 1024, 3), zero(1, 6, 64, 1024);
-  x.for_each_real([&](std::size_t i) {
-    if ((i / 16) % 1024 >= 640) x.mem[i] = 0.f;
-  });
-  inside.for_each_real([&](std::size_t i) { inside.mem[i] = (i / 16) % 1024 >= 512 ? 0.f : x.mem[i]; });
+  const WideFrames frames;
+  const yelan::test::Owned &x = frames.x, &inside = frames.inside;
+  yelan::test::Owned zero(1, 6, 64, 1024);
   layers::NoGrad no_grad;
   net.forward(x.act);
   const MaskOut full(net);
@@ -420,6 +429,49 @@ TEST_CASE("mask net forward_cropped: the frame's masks where the frame is empty 
   std::string bad = text;
   bad.replace(bad.find("\"crop_margin\":16"), 16, "\"crop_margin\":-2");
   CHECK_THROWS_WITH(parse_model_config(bad, "x.json"), Catch::Contains("mask.crop_margin must lie in 0..4096"));
+}
+
+// The pipeline runs stage 1 over a box under run.bf16: the box's run is then the bf16 forward
+// of the frame emptied outside it (the empty room's maps made in bf16 too), and the whole
+// frame as the box is that forward, bit for bit.
+TEST_CASE("mask net forward_cropped under run.bf16: the bf16 forward of the frame emptied outside the box", "[networks][mask]") {
+  const std::string text =
+      R"({"name":"wide-mask","input":{"channels":6,"sensor_height":64,"sensor_width":1024,"downscale":1,"window":1},)"
+      R"("mask":{"width_mult":0.25,"n_masks":2,"crop_margin":16},"pose":{"width_mult":0.125,"hidden":4,"stages":1,"joints":13,"convlstm":"causal"},)"
+      R"("run":{"bf16":true}})";
+  const ModelConfig cfg = parse_model_config(text, "wide-mask-bf16");
+  MaskNet net(cfg), plain(cfg);
+  net.init(5);
+  plain.init(5);
+  net.set_training(false);
+  plain.set_training(false);
+  net.set_bf16(true);
+  const WideFrames frames;
+  const yelan::test::Owned &x = frames.x, &inside = frames.inside;
+  layers::NoGrad no_grad;
+  net.forward(x.act);
+  const MaskOut full(net);
+  net.forward(inside.act);
+  const MaskOut full_inside(net);
+  net.forward_cropped(x.act, {3, 5, 500, 60});
+  const MaskOut crop(net);
+  plain.forward_cropped(x.act, {3, 5, 500, 60});
+  const MaskOut crop_fp32(plain);
+  if (layers::bf16_path_if(true) == layers::Bf16Path::none) {
+    REQUIRE(crop.masks == crop_fp32.masks);  // no bf16 on this CPU: the fp32 run
+    return;
+  }
+  CHECK(crop.masks != crop_fp32.masks);  // bf16 did run
+  const auto [lo, hi] = std::minmax_element(full_inside.masks.begin(), full_inside.masks.end());
+  double worst = 0;
+  for (std::size_t i = 0; i < crop.masks.size(); ++i)
+    worst = std::max(worst, double(std::abs(crop.masks[i] - full_inside.masks[i])));
+  INFO("logits spread " << (*hi - *lo) << ", worst " << worst);
+  CHECK(worst < 0.03 * double(*hi - *lo));
+  for (std::size_t i = 0; i < crop.scores.size(); ++i) CHECK(crop.scores[i] == Approx(full_inside.scores[i]).margin(1e-3));
+  net.forward_cropped(x.act, {0, 0, 1024, 64});
+  REQUIRE(MaskOut(net).masks == full.masks);
+  REQUIRE(MaskOut(net).scores == full.scores);
 }
 
 TEST_CASE("causal pose net streamed a frame at a time equals the window forward", "[networks][pose]") {

@@ -203,6 +203,16 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
           w16.resize(kernels::deconv2x2_bf16_weight_halves(d));
           ops.push_back({"deconv2d.fwd", [&] { kernels::deconv2x2_fwd_bf16_amx(d, y.p, w16.data(), bias.p, x.p); }, "amx-bf16"});
         }
+        // Without AMX, on AVX512-BF16 (AMD Zen 4, 5): the Winograd GEMMs and the up-sampling
+        // in bf16 pairs, what stage 1 runs there.
+        const bool pairs = !amx && kernels::winograd_bf16_enabled() && isa == kernels::best_isa();
+        if (pairs && !c.transposed && kernels::winograd_applicable(s)) {
+          w16.resize(kernels::winograd_bf16_weight_halves(s));
+          ops.push_back({"conv2d.fwd", [&] { kernels::conv_fwd_winograd_bf16(s, x.p, w16.data(), bias.p, y.p); }, "wino-bf16"});
+        } else if (pairs && c.transposed && kernels::deconv2x2_bf16_applicable(d)) {
+          w16.resize(kernels::deconv2x2_bf16_pairs_weight_halves(d));
+          ops.push_back({"deconv2d.fwd", [&] { kernels::deconv2x2_fwd_bf16_pairs(d, y.p, w16.data(), bias.p, x.p); }, "bf16-pairs"});
+        }
         for (const auto& op : ops) {
           const double sec = median_seconds_per_call(op.fn, reps, quick ? 0.02 : 0.05);
           Record r{c.where, op.op, op.algo, c.k, c.k, c.stride, c.cin, c.cout, c.h, c.w,
@@ -239,11 +249,11 @@ int run_kernels_bench(const std::vector<std::string>& argv, std::ostream& out, s
     }
   }
   if (!args.flag("--json")) {
-    out << "where                  op                   kernel  cin->cout  HxW     isa   thr        ms   GFLOP/s  %peak"
+    out << "where                  op                       kernel  cin->cout  HxW     isa   thr        ms   GFLOP/s  %peak"
            "  oneDNN ours/oneDNN  torch ours/torch\n";
     for (const Record& r : recs) {
       char line[256];
-      std::snprintf(line, sizeof line, "%-22s %-20s %dx%d/%d %4d->%-4d %3dx%-3d %-6s %d %9.3f %9.1f %6.1f",
+      std::snprintf(line, sizeof line, "%-22s %-24s %dx%d/%d %4d->%-4d %3dx%-3d %-6s %d %9.3f %9.1f %6.1f",
                     r.where.c_str(), (r.algo == "direct" ? r.op : r.op + "/" + r.algo).c_str(), r.kh, r.kw, r.stride, r.cin, r.cout, r.h, r.w, r.isa.c_str(),
                     r.threads, r.ms, r.gflops, r.pct_peak);
       out << line;

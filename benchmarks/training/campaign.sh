@@ -159,6 +159,7 @@ DATA_MASK_MIX2=${DATA_MASK_MIX2:-/var/tmp/yelan-data/sk-mask-mix2}
 DATA_S45=${DATA_S45:-/var/tmp/yelan-data/sk-s45}
 DATA_MASK_MIX3=${DATA_MASK_MIX3:-/var/tmp/yelan-data/sk-mask-mix3}
 DATA_MASK_MIX4=${DATA_MASK_MIX4:-/var/tmp/yelan-data/sk-mask-mix4}
+DATA_S56=${DATA_S56:-/var/tmp/yelan-data/sk-s56}
 STICK_CFG0=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s16.json
 dataset_s9() { dataset_arms "$DATA_S9" --free-arms 0.5; }
 
@@ -733,6 +734,21 @@ case "$what" in
   # each. mask-s53 lost IoU as deployed against mask-s52 (0.747 against 0.752).
   train-mask-s54f)
     mask_recipe mask-s54f "$DATA_MASK_MIX4/train" "${MASK_S54_STEPS:-600}" 9 models/campaign/mask-s52/checkpoint.h5 --mask-focus 3 ;;
+  # sk-s56 (fifty-sixth session): stage 1 gained from every set of new recordings (mask-s43 on
+  # +320, mask-s51/52 on +402) and stopped gaining from more steps on the same 1330 (mask-s53,
+  # mask-s54f): a fresh draw of sk-s43's mix (seed 11, no set drew it), four times over, made in
+  # quarters so that a set stopped early keeps the mix (members are drawn by seed, split and
+  # index: each command adds the next indices; done files are kept). About 25 min a quarter on
+  # two cores. Then mask-s57: mask-s52 trained 600 steps on it by its recipe (windows drawn by
+  # seed 10; about 55 min on two cores, resumable), scored as deployed against the default.
+  data-s56)
+    for q in ${S56_QUARTERS:-1 2 3 4}; do
+      "$Y" sim --dataset "$DATA_S56" --seed 11 --train $((160 * q)) --train-dancer-rooms $((64 * q)) \
+        --train-empty $((48 * q)) --train-rooms $((48 * q)) --val 0 --test 0 --duration 5s --random-looks --frame-dancer \
+        --free-arms 0.5 --front-print 0.5-2 --threads "${THREADS:-2}"
+    done ;;
+  train-mask-s57)
+    mask_recipe mask-s57 "$DATA_S56/train" "${MASK_S57_STEPS:-600}" 10 models/campaign/mask-s52/checkpoint.h5 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;

@@ -187,11 +187,11 @@ struct StreamScorer {
     r.crop_share = crop_share(crops);
     r.mask_crop_runs = crops.mask_crop_runs;
     r.mask_crop_share = crops.mask_crop_runs ? crops.mask_crop_area / double(crops.mask_crop_runs) : 1.0;
-    if (r.mask_ticks) {
+    if (r.mask_ticks && overlap.uni > 0) {
       r.mask_iou = overlap.iou();
-      for (const auto& [c, o] : overlap_by_condition) r.mask_iou_by_condition[c] = o.iou();
       r.mask_iou_px = overlap.iou_px();
-      for (const auto& [c, o] : overlap_by_condition) r.mask_iou_px_by_condition[c] = o.iou_px();
+      r.mask_iou_by_condition = train::measured_iou(overlap_by_condition);
+      r.mask_iou_px_by_condition = train::measured_iou(overlap_by_condition, true);
     }
     if (!depth_ratio.empty()) {
       r.depth_ratio_median = percentile(depth_ratio, 0.5);

@@ -59,4 +59,11 @@ void add_mask_overlap(MaskOverlap& m, const std::uint8_t* truth, int sensor_w, c
   }
 }
 
+std::map<std::string, double> measured_iou(const std::map<std::string, MaskOverlap>& by_key, bool sensor_px) {
+  std::map<std::string, double> out;
+  for (const auto& [key, m] : by_key)
+    if ((sensor_px ? m.uni_px : m.uni) > 0) out[key] = sensor_px ? m.iou_px() : m.iou();
+  return out;
+}
+
 }  // namespace yelan::train

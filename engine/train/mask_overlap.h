@@ -8,6 +8,8 @@
 // labels call a cell the dancer's when at least half its pixels are).
 #pragma once
 #include <cstdint>
+#include <map>
+#include <string>
 
 namespace yelan::train {
 
@@ -27,5 +29,10 @@ struct MaskOverlap {
 // The pixel count covers the sensor's first mask_h * down rows and mask_w * down columns.
 void add_mask_overlap(MaskOverlap& m, const std::uint8_t* truth, int sensor_w, const float* keep, int mask_h,
                       int mask_w, int down);
+
+// The IoU of each key whose frames have one (a true or a kept pixel; at the sensor's pixels
+// with sensor_px): a key with neither, such as a dancer wholly behind furniture all along,
+// is left out rather than scored 0, which would read as a mask that missed the dancer.
+std::map<std::string, double> measured_iou(const std::map<std::string, MaskOverlap>& by_key, bool sensor_px = false);
 
 }  // namespace yelan::train
