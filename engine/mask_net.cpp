@@ -24,6 +24,9 @@ void crop_from(const Act& big, const Act& small, int top, int left) {
 }  // namespace
 
 Act DoubleConv::forward(const Act& x) { return b_.forward(a_.forward(x)); }
+Act DoubleConv::forward_cat(const Act& a, const Act& b, int top, int left) {
+  return b_.forward(a_.forward_cat(a, b, top, left));
+}
 void DoubleConv::backward(const Act& x, const Act& dy, const Act& dx) {
   const Act da = da_.like(a_.out());
   b_.backward(a_.out(), dy, &da);
@@ -129,10 +132,15 @@ Act MaskNet::unet_top(const Act& in) {
     if (dy < 0 || dx < 0) throw std::logic_error("mask net: up-sampled map larger than its skip");
     pad_top_[k] = dy / 2;
     pad_left_[k] = dx / 2;
-    cat_[k] = cat_buf_[k].get(skip.n, skip.c + upt_[k].c, skip.h, skip.w);
     padded_[k] = Act{nullptr, upt_[k].n, upt_[k].c, skip.h, skip.w};
-    layers::concat_padded(skip, upt_[k], pad_top_[k], pad_left_[k], cat_[k]);
-    y = upo_[k] = up_conv_[k]->forward(cat_[k]);
+    if (layers::grad_enabled()) {  // backward reads the concatenation
+      cat_[k] = cat_buf_[k].get(skip.n, skip.c + upt_[k].c, skip.h, skip.w);
+      layers::concat_padded(skip, upt_[k], pad_top_[k], pad_left_[k], cat_[k]);
+      y = upo_[k] = up_conv_[k]->forward(cat_[k]);
+    } else {  // inference: no copy where the convolution reads the two in place
+      cat_[k] = Act{nullptr, skip.n, skip.c + upt_[k].c, skip.h, skip.w};
+      y = upo_[k] = up_conv_[k]->forward_cat(skip, upt_[k], pad_top_[k], pad_left_[k]);
+    }
   }
   return y;
 }

@@ -25,6 +25,8 @@ class DoubleConv : public layers::Module<DoubleConv> {
     f(b_, {"double_conv.3.", 2, "double_conv.4."});
   }
   layers::Act forward(const layers::Act& x);
+  // forward of [a, F.pad(b)], read in place where the first convolution can (ConvBn::forward_cat).
+  layers::Act forward_cat(const layers::Act& a, const layers::Act& b, int top, int left);
   void backward(const layers::Act& x, const layers::Act& dy, const layers::Act& dx);
 
  private:
@@ -104,6 +106,7 @@ class MaskNet : public layers::Module<MaskNet> {
   std::array<layers::Act, kLevels + 1> x_;  // inc output, down1..down4 outputs
   // padded_: the shapes of F.pad's maps alone (no data): concat_padded writes cat_ straight
   // from upt_; backward and the cropped run's empty frame make them from upt_ where needed.
+  // Under NoGrad cat_ is a shape too: the up convolutions read skip and upt_ in place.
   std::array<layers::Act, kLevels> pooled_, upt_, padded_, cat_, upo_;
   std::array<int, kLevels> pad_top_{}, pad_left_{};
   layers::ActBuf pooled_buf_[kLevels], upt_buf_[kLevels], cat_buf_[kLevels];
@@ -125,7 +128,7 @@ class MaskNet : public layers::Module<MaskNet> {
   std::array<Box, kLevels> written_pad_, written_up_;
   Box written_mask_;
   std::vector<float> zero_top_sum_;  // the zero frame's top, summed per channel over the frame
-  layers::ActBuf win_a_, win_b_, win_cat_, win_out_, gap_win_;
+  layers::ActBuf win_a_, win_b_, win_out_, gap_win_;
   bool have_zero_ = false, cropped_ = false;
   bool zero_bf16_ = false;  // the precision the empty frame was computed at (layers::bf16_active)
   // backward only, each dL/d the activation it is named after

@@ -120,9 +120,7 @@ Box MaskNet::forward_cropped(const Act& x, Box box) {
     put(t, up_box, up_box, cpad_[k].act);
     written_pad_[k] = up_box;
     const Act sa = window(skip, in, win_a_), sb = window(cpad_[k].act, in, win_b_);
-    const Act cat = win_cat_.get(1, sa.c + sb.c, in.height(), in.width());
-    layers::concat_channels(sa, sb, cat);
-    put(up_conv_[k]->forward(cat), in, r[level], cup_[k].act);
+    put(up_conv_[k]->forward_cat(sa, sb, 0, 0), in, r[level], cup_[k].act);
     written_up_[k] = r[level];
   }
   // The masks over the input's box, the zero frame's elsewhere; the score head on the frame's

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <stdexcept>
 #include <vector>
 
 #include "kernels/dispatch.h"
@@ -203,7 +204,41 @@ void fwd_winograd_scalar(const ConvShape& s, const float* x, const float* u, con
   fwd_winograd_scalar_rounded(s, x, u, bias, y, [](float v) { return v; });
 }
 
+// The scalar table's: the two copied into one map, then the textbook Winograd.
+void fwd_winograd_cat_scalar(const ConvShape& s, const ConcatInput& in, const float* u, const float* bias, float* y) {
+  std::vector<float> x(x_floats(s));
+  concat_input(s, in, x.data());
+  fwd_winograd_scalar(s, x.data(), u, bias, y);
+}
+
 }  // namespace
+
+bool winograd_cat_applicable(const ConvShape& s, const ConcatInput& in) {
+  return winograd_applicable(s) && s.n == 1 && in.a && in.b && in.a_c > 0 && in.b_c > 0 && in.a_c % 8 == 0 &&
+         s.ic == in.a_c + in.b_c && in.top >= 0 && in.left >= 0 && in.b_h > 0 && in.b_w > 0 &&
+         in.top + in.b_h <= s.ih && in.left + in.b_w <= s.iw;
+}
+
+void concat_input(const ConvShape& s, const ConcatInput& in, float* x) {
+  if (!winograd_cat_applicable(s, in)) throw std::invalid_argument("concat_input: the two maps do not make the input");
+  const std::size_t plane = std::size_t(s.ih) * s.iw, b_plane = std::size_t(in.b_h) * in.b_w;
+  std::memset(x, 0, x_floats(s) * sizeof(float));
+  for (int c = 0; c < s.ic; ++c) {
+    float* dst = x + std::size_t(c / kBlock) * plane * kBlock + c % kBlock;
+    for (int h = 0; h < s.ih; ++h)
+      for (int w = 0; w < s.iw; ++w) {
+        float v = 0;
+        if (c < in.a_c) {
+          v = in.a[(std::size_t(c / kBlock) * plane + std::size_t(h) * s.iw + w) * kBlock + c % kBlock];
+        } else {
+          const int cb = c - in.a_c, bh = h - in.top, bw = w - in.left;
+          if (bh >= 0 && bh < in.b_h && bw >= 0 && bw < in.b_w)
+            v = in.b[(std::size_t(cb / kBlock) * b_plane + std::size_t(bh) * in.b_w + bw) * kBlock + cb % kBlock];
+        }
+        dst[(std::size_t(h) * s.iw + w) * kBlock] = v;
+      }
+  }
+}
 
 void fwd_winograd_scalar_rounded(const ConvShape& s, const float* x, const float* u, const float* bias, float* y,
                                  float (*round_v)(float)) {
@@ -287,7 +322,8 @@ void deconv_bwd_weights(const ConvKernels& k, const DeconvShape& s, const float*
   if (dbias) channel_sums(s.n, c.icb(), std::size_t(c.ih) * c.iw, dy, dbias);
 }
 
-const ConvKernels conv_scalar{Isa::scalar, fwd_scalar, bwd_data_scalar, bwd_weights_scalar, fwd_winograd_scalar};
+const ConvKernels conv_scalar{Isa::scalar,         fwd_scalar,         bwd_data_scalar, bwd_weights_scalar,
+                              fwd_winograd_scalar, fwd_winograd_cat_scalar};
 
 YELAN_KERNEL_DISPATCH(ConvKernels, conv)
 

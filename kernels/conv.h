@@ -46,6 +46,22 @@ struct ConvShape {
   bool valid() const;  // positive sizes, kernel <= kMaxKernel, pad < kernel, output >= 1x1
 };
 
+// A convolution input made of two maps side by side in channels, as the U-Net's up path
+// concatenates them: a_c channels of `a` (the convolution's input size), then b_c of `b`
+// (b_h x b_w, placed at (top, left) with zeros around it: F.pad's). One image (n = 1).
+struct ConcatInput {
+  const float* a = nullptr;
+  int a_c = 0;
+  const float* b = nullptr;
+  int b_c = 0, b_h = 0, b_w = 0, top = 0, left = 0;
+};
+// Whether fwd_winograd_cat reads it in place: winograd_applicable(s), n 1, s.ic = a_c + b_c,
+// a_c % 8 == 0 (a native vector never takes lanes of both but on 16 lanes, where a block of
+// a_c % 16 == 8 joins two halves), and b inside the input.
+bool winograd_cat_applicable(const ConvShape& s, const ConcatInput& in);
+// The two as one map of s.ic channels (x_floats of s): what layers::concat_padded makes.
+void concat_input(const ConvShape& s, const ConcatInput& in, float* x);
+
 struct ConvKernels {
   Isa isa;
   // y = conv(x, w) + bias (bias may be null; it has ocb()*16 entries, padding zero)
@@ -60,6 +76,9 @@ struct ConvKernels {
   // Inference only, 3x3 stride 1 (winograd_applicable): Winograd F(4x4, 3x3) with weights
   // from pack_winograd_weights. Same contract as fwd; error bound in tests/kernels/test_conv.cpp.
   void (*fwd_winograd)(const ConvShape& s, const float* x, const float* w_wino, const float* bias, float* y);
+  // fwd_winograd of the concatenation of two maps, read in place by the input transform
+  // (winograd_cat_applicable must hold): the same outputs, bit for bit, without the copy.
+  void (*fwd_winograd_cat)(const ConvShape& s, const ConcatInput& in, const float* w_wino, const float* bias, float* y);
 };
 
 // ConvTranspose2d (PyTorch semantics, weights (in, out, kh, kw)) is the adjoint of the conv

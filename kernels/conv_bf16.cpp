@@ -77,6 +77,17 @@ void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint1
 #endif
 }
 
+void conv_fwd_winograd_bf16_cat(const ConvShape& s, const ConcatInput& in, const std::uint16_t* u, const float* bias,
+                                float* y) {
+  if (!winograd_cat_applicable(s, in)) throw std::invalid_argument("conv_fwd_winograd_bf16_cat: not a concatenated 3x3/1 input");
+  if (!winograd_bf16_available()) throw std::logic_error("conv_fwd_winograd_bf16_cat: this CPU gives no AVX512-BF16");
+#if defined(YELAN_WINOGRAD_BF16_BUILT)
+  winograd_bf16_kernels.fwd_cat(s, in, u, bias, y);
+#else
+  (void)u; (void)bias; (void)y;
+#endif
+}
+
 bool conv_bf16_applicable(const ConvShape& s) { return s.valid() && s.stride == 1; }
 
 std::size_t conv_bf16_weight_halves(const ConvShape& s) {

@@ -84,6 +84,10 @@ void pack_winograd_bf16_weights(const ConvShape& s, const float* u_wino, std::ui
 // std::logic_error otherwise), and winograd_applicable(s).
 void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint16_t* u_bf16, const float* bias,
                             float* y);
+// conv_fwd_winograd_bf16 of two maps concatenated in channels, read in place
+// (winograd_cat_applicable must hold, as ConvKernels::fwd_winograd_cat): the same outputs.
+void conv_fwd_winograd_bf16_cat(const ConvShape& s, const ConcatInput& in, const std::uint16_t* u_bf16,
+                                const float* bias, float* y);
 // The U-Net's up-sampling in the same bf16 pairs (deconv2x2_bf16_applicable shapes): four
 // GEMMs over the input's pixels, one per output phase, where there is no AMX. Weights are
 // PyTorch's (in, out, 2, 2), packed as [4 phases][OCB][ICB][8 pairs][16 oc][2] halves; the
@@ -94,6 +98,7 @@ void deconv2x2_fwd_bf16_pairs(const DeconvShape& d, const float* x, const std::u
                               float* y);
 struct WinogradBf16Kernels {
   void (*fwd)(const ConvShape& s, const float* x, const std::uint16_t* u, const float* bias, float* y);
+  void (*fwd_cat)(const ConvShape& s, const ConcatInput& in, const std::uint16_t* u, const float* bias, float* y);
   void (*deconv2x2)(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias, float* y);
 };
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <type_traits>
 #include <cstddef>
 #include <utility>
 
@@ -25,7 +26,8 @@ constexpr int CONV_DW_CT = VL == 16 ? 16 : 4;
 #include "kernels/conv_winograd.inl"
 
 // The fp32 Winograd: its 36 GEMMs over channels are the direct convolution's tile with one tap.
-void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
+template <class Input>
+void winograd_fp32(const ConvShape& s, const Input& in, const float* u, const float* bias, float* y) {
   const int ICB = s.icb(), OCB = s.ocb();
   const std::ptrdiff_t cs = std::ptrdiff_t(kWinoChunk) * kBlock;
   const bool half_last = s.oc - (OCB - 1) * kBlock <= kBlock / 2;  // see tile
@@ -56,10 +58,19 @@ void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const
         }
       }
   };
-  winograd_fwd<float>(s, x, bias, y, [](float* at, vf v) { storef(at, v); }, gemm);
+  winograd_fwd<float>(s, in, bias, y, [](float* at, vf v) { storef(at, v); }, gemm);
 }
 
-constexpr ConvKernels kTable{Isa::YELAN_VARIANT_ISA, conv_fwd, conv_bwd_data, conv_bwd_weights, conv_fwd_winograd};
+void conv_fwd_winograd(const ConvShape& s, const float* x, const float* u, const float* bias, float* y) {
+  winograd_fp32(s, PlainInput{x, s.icb(), s.ih, s.iw}, u, bias, y);
+}
+
+void conv_fwd_winograd_cat(const ConvShape& s, const ConcatInput& in, const float* u, const float* bias, float* y) {
+  winograd_fp32(s, CatInput{in, s.ih, s.iw}, u, bias, y);
+}
+
+constexpr ConvKernels kTable{Isa::YELAN_VARIANT_ISA, conv_fwd,         conv_bwd_data, conv_bwd_weights,
+                             conv_fwd_winograd,      conv_fwd_winograd_cat};
 
 }  // namespace
 }  // namespace yelan::kernels::YELAN_VARIANT_ISA

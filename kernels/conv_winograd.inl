@@ -42,17 +42,100 @@ constexpr std::ptrdiff_t kWinoMTile = 36 * kBlock;                  // M: to the
 constexpr std::ptrdiff_t kWinoMBlock = kWinoChunk * kWinoMTile;     // M: to the next output block
 inline std::ptrdiff_t wino_m_index(int xi, int ob, int t) { return ob * kWinoMBlock + t * kWinoMTile + xi * kBlock; }
 
+// d = the 6x6 patch at (ih0, iw0) of one vector's plane (base: its pixel (0, 0), h x w pixels
+// kBlock floats apart), zeros outside the plane. Most patches lie inside: 36 loads, no test.
+inline void load_patch(vf d[6][6], const float* base, int h, int w, int ih0, int iw0) {
+  if (ih0 >= 0 && iw0 >= 0 && ih0 + 6 <= h && iw0 + 6 <= w) {
+    const float* p = base + (std::ptrdiff_t(ih0) * w + iw0) * kBlock;
+#pragma GCC unroll 6
+    for (int i = 0; i < 6; ++i)
+#pragma GCC unroll 6
+      for (int j = 0; j < 6; ++j) d[i][j] = loadf(p + (std::ptrdiff_t(i) * w + j) * kBlock);
+    return;
+  }
+#pragma GCC unroll 6
+  for (int i = 0; i < 6; ++i)
+#pragma GCC unroll 6
+    for (int j = 0; j < 6; ++j) {
+      const int ih = ih0 + i, iw = iw0 + j;
+      d[i][j] = ih >= 0 && ih < h && iw >= 0 && iw < w ? loadf(base + (std::ptrdiff_t(ih) * w + iw) * kBlock) : vf{};
+    }
+}
+
+// The input of winograd_fwd: patch(d, n, cb, ih0, iw0, q) loads native vector q of channel
+// block cb of image n. A plain map:
+struct PlainInput {
+  const float* x;
+  int icb, h, w;
+  void patch(vf d[6][6], int n, int cb, int ih0, int iw0, int q) const {
+    const std::ptrdiff_t plane = std::ptrdiff_t(h) * w * kBlock;
+    load_patch(d, x + (std::ptrdiff_t(n) * icb + cb) * plane + q * VL, h, w, ih0, iw0);
+  }
+};
+
+// d = lanes from..from+7 of lo, then lanes 0-7 of hi (16-lane vectors; from is 0 or 8). A
+// template on the lane count so that narrower ISAs, which never split a vector, compile none
+// of it.
+template <int L>
+void join_halves(vf d[6][6], const vf lo[6][6], const vf hi[6][6], int from) {
+  if constexpr (L == 16) {
+    using V = std::conditional_t<L == 16, vf, vf>;  // dependent: checked only where instantiated
+#pragma GCC unroll 6
+    for (int i = 0; i < 6; ++i)
+#pragma GCC unroll 6
+      for (int j = 0; j < 6; ++j)
+        d[i][j] = from == 0 ? __builtin_shufflevector(V(lo[i][j]), V(hi[i][j]), 0, 1, 2, 3, 4, 5, 6, 7, 16, 17, 18, 19, 20, 21, 22, 23)
+                            : __builtin_shufflevector(V(lo[i][j]), V(hi[i][j]), 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 21, 22, 23);
+  }
+}
+
+// Two maps concatenated in channels, read in place (ConcatInput; one image): channels below
+// a_c from a, the rest from b placed at (top, left). a_c % 8 == 0, so a native vector of 8 or
+// fewer lanes comes whole from one map; a 16-lane one at a block of a_c % 16 == 8 (stage 1's
+// 24 + 24) is two half vectors, joined by a shuffle.
+struct CatInput {
+  const ConcatInput& in;
+  int h, w;  // the convolution's input size, a's
+  void patch(vf d[6][6], int /*n*/, int cb, int ih0, int iw0, int q) const {
+    const int c0 = cb * kBlock + q * VL;  // the vector's first channel
+    if (c0 + VL <= in.a_c) return load_patch(d, lane(in.a, c0, h, w), h, w, ih0, iw0);
+    // Below 16 lanes a vector never straddles the two (a_c % 8 == 0).
+    if (VL < 16 || c0 >= in.a_c) return b_patch(d, c0 - in.a_c, ih0, iw0);
+    if constexpr (VL == 16) {  // a's last block (its lanes from a_c % 16 up are padding) and b's first
+      vf lo[6][6], hi[6][6];
+      load_patch(lo, lane(in.a, c0, h, w), h, w, ih0, iw0);
+      b_patch(hi, 0, ih0, iw0);
+      join_halves<VL>(d, lo, hi, 0);
+    }
+  }
+  // Where channel c's lane of pixel (0, 0) lies in a map of h x w.
+  static const float* lane(const float* m, int c, int h, int w) {
+    return m + (std::ptrdiff_t(c / kBlock) * h * w) * kBlock + c % kBlock;
+  }
+  // b's channels from c on, at the convolution's input coordinates.
+  void b_patch(vf d[6][6], int c, int ih0, int iw0) const {
+    const int bh = in.b_h, bw = in.b_w, bi = ih0 - in.top, bj = iw0 - in.left;
+    if (VL < 16 || c % kBlock + VL <= kBlock) return load_patch(d, lane(in.b, c, bh, bw), bh, bw, bi, bj);
+    if constexpr (VL == 16) {  // lanes 8-15 of one block of b, then lanes 0-7 of the next (or padding)
+      vf lo[6][6], hi[6][6] = {};
+      load_patch(lo, lane(in.b, c - 8, bh, bw), bh, bw, bi, bj);
+      if (c + 8 < in.b_c) load_patch(hi, lane(in.b, c + 8, bh, bw), bh, bw, bi, bj);
+      join_halves<VL>(d, lo, hi, 8);
+    }
+  }
+};
+
 // The transforms' fixed-count loops are unrolled by pragma, not left to the optimiser's
 // heuristics: kept as loops the 6x6 tiles live on the stack with an index multiply per
 // access (at -O2 the transforms took half of a bf16 Winograd convolution on stage 1's
 // shapes), and even -O3 kept the output transform's clipped row pass a loop (2.5 -> 2.2 ms
 // of transforms on the eighteen shapes once it too unrolled).
-template <class T, class StoreV, class Gemm>
-void winograd_fwd(const ConvShape& s, const float* x, const float* bias, float* y, StoreV store_v, Gemm gemm) {
+template <class T, class Input, class StoreV, class Gemm>
+void winograd_fwd(const ConvShape& s, const Input& in, const float* bias, float* y, StoreV store_v, Gemm gemm) {
   const int OH = s.oh(), OW = s.ow(), ICB = s.icb(), OCB = s.ocb();
   const int TH = (OH + 3) / 4, TW = (OW + 3) / 4, T_ = TH * TW;
   const int chunks = (T_ + kWinoChunk - 1) / kWinoChunk;
-  const std::ptrdiff_t x_plane = std::ptrdiff_t(s.ih) * s.iw * kBlock, y_plane = std::ptrdiff_t(OH) * OW * kBlock;
+  const std::ptrdiff_t y_plane = std::ptrdiff_t(OH) * OW * kBlock;
   const std::size_t cs = std::size_t(kWinoChunk) * kBlock;  // one channel block of one product
   on_team(worth_sharing(s.flops() / 4), [&] {  // a quarter of the multiplies
     // V's share is sized in floats whatever T is (bf16 uses half of it): one scratch shape.
@@ -65,31 +148,12 @@ void winograd_fwd(const ConvShape& s, const float* x, const float* bias, float* 
         const int t0 = ch * kWinoChunk, tc = std::min(kWinoChunk, T_ - t0);
         // Input transform: V[xi][cb][t] = (B^T d B)[xi] for the tile's 6x6 input patch.
         for (int cb = 0; cb < ICB; ++cb) {
-          const float* xb = x + (std::ptrdiff_t(n) * ICB + cb) * x_plane;
           for (int t = 0; t < tc; ++t) {
             const int ih0 = (t0 + t) / TW * 4 - s.pad_h, iw0 = (t0 + t) % TW * 4 - s.pad_w;
-            // Most tiles lie inside the image: their 36 loads need no test.
-            const bool inside = ih0 >= 0 && iw0 >= 0 && ih0 + 6 <= s.ih && iw0 + 6 <= s.iw;
 #pragma GCC unroll 6
             for (int q = 0; q < kWinoNV; ++q) {
               vf d[6][6], r[6][6];
-              if (inside) {
-                const float* p = xb + (std::ptrdiff_t(ih0) * s.iw + iw0) * kBlock + q * VL;
-#pragma GCC unroll 6
-                for (int i = 0; i < 6; ++i)
-#pragma GCC unroll 6
-                  for (int j = 0; j < 6; ++j) d[i][j] = loadf(p + (std::ptrdiff_t(i) * s.iw + j) * kBlock);
-              } else {
-#pragma GCC unroll 6
-                for (int i = 0; i < 6; ++i)
-#pragma GCC unroll 6
-                  for (int j = 0; j < 6; ++j) {
-                    const int ih = ih0 + i, iw = iw0 + j;
-                    d[i][j] = ih >= 0 && ih < s.ih && iw >= 0 && iw < s.iw
-                                  ? loadf(xb + (std::ptrdiff_t(ih) * s.iw + iw) * kBlock + q * VL)
-                                  : vf{};
-                  }
-              }
+              in.patch(d, n, cb, ih0, iw0, q);
 #pragma GCC unroll 6
               for (int j = 0; j < 6; ++j) {  // columns: r[.][j] = B^T d[.][j]
                 vf col[6], out[6];

@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 #include <utility>
 
 #include "kernels/conv_bf16.h"
@@ -134,7 +135,8 @@ void gemm_blocks(GemmArgs a, const std::uint16_t* w, int ocb, int icb, bool half
   }
 }
 
-void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint16_t* u, const float* bias, float* y) {
+template <class Input>
+void winograd_bf16(const ConvShape& s, const Input& in, const std::uint16_t* u, const float* bias, float* y) {
   const int ICB = s.icb(), OCB = s.ocb();
   const bool half_last = half_last_block(s.oc);
   const GemmArgs args = channel_gemm(s.ic, kWinoChunk, kWinoMTile, kWinoMBlock);
@@ -148,7 +150,16 @@ void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint1
   const auto store_v = [](std::uint16_t* at, vf v) {
     _mm256_storeu_si256(reinterpret_cast<__m256i*>(at), (__m256i)_mm512_cvtneps_pbh((__m512)v));
   };
-  winograd_fwd<std::uint16_t>(s, x, bias, y, store_v, gemm);
+  winograd_fwd<std::uint16_t>(s, in, bias, y, store_v, gemm);
+}
+
+void conv_fwd_winograd_bf16(const ConvShape& s, const float* x, const std::uint16_t* u, const float* bias, float* y) {
+  winograd_bf16(s, PlainInput{x, s.icb(), s.ih, s.iw}, u, bias, y);
+}
+
+void conv_fwd_winograd_bf16_cat(const ConvShape& s, const ConcatInput& in, const std::uint16_t* u, const float* bias,
+                                float* y) {
+  winograd_bf16(s, CatInput{in, s.ih, s.iw}, u, bias, y);
 }
 
 // The U-Net's 2x2 stride-2 up-sampling: per output phase (dy, dx) a 1x1 convolution of the
@@ -207,5 +218,6 @@ void deconv2x2_fwd_bf16_pairs(const DeconvShape& d, const float* x, const std::u
 
 namespace yelan::kernels {
 extern const WinogradBf16Kernels winograd_bf16_kernels{YELAN_VARIANT_ISA::conv_fwd_winograd_bf16,
+                                                       YELAN_VARIANT_ISA::conv_fwd_winograd_bf16_cat,
                                                        YELAN_VARIANT_ISA::deconv2x2_fwd_bf16_pairs};
 }

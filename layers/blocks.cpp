@@ -10,17 +10,21 @@ void ConvBn::params(const std::string& conv_key, const std::string& bn_key, Para
   bn.params(bn_key, out);
 }
 
+void ConvBn::fold() {
+  const int c = conv.spec().out;
+  if (scale_.size() != std::size_t(c)) scale_ = Floats(c), shift_ = Floats(c);
+  for (int o = 0; o < c && !conv.fold_packed(); ++o) {
+    scale_[o] = bn.weight.value[o] / std::sqrt(bn.running_var.value[o] + bn.eps);
+    shift_[o] = bn.bias.value[o] - bn.running_mean.value[o] * scale_[o];
+  }
+}
+
 Act ConvBn::forward(const Act& x) {
   const Act s = conv.out_shape(x);
   folded_ = !bn.training && !grad_enabled();
   if (folded_) {
     post_ = post_buf_.like(s);
-    const int c = conv.spec().out;
-    if (scale_.size() != std::size_t(c)) scale_ = Floats(c), shift_ = Floats(c);
-    for (int o = 0; o < c && !conv.fold_packed(); ++o) {
-      scale_[o] = bn.weight.value[o] / std::sqrt(bn.running_var.value[o] + bn.eps);
-      shift_[o] = bn.bias.value[o] - bn.running_mean.value[o] * scale_[o];
-    }
+    fold();
     // The ReLU in the convolution's store where the kernel has one (forward convolutions).
     const bool fuse = bn.fused_relu() && !conv.spec().transposed;
     conv.forward_folded(x, post_, scale_.data(), shift_.data(), true, fuse);
@@ -32,6 +36,20 @@ Act ConvBn::forward(const Act& x) {
   conv.forward(x, pre_, !bn.training);  // Winograd when only inference follows
   bn.forward(pre_, post_);
   return post_;
+}
+
+Act ConvBn::forward_cat(const Act& a, const Act& b, int top, int left) {
+  if (!bn.training && !grad_enabled() && !conv.spec().transposed) {
+    post_ = post_buf_.like(conv.out_shape(Act{nullptr, a.n, a.c + b.c, a.h, a.w}));
+    fold();
+    if (conv.forward_folded_cat(a, b, top, left, post_, scale_.data(), shift_.data(), bn.fused_relu())) {
+      folded_ = true;
+      return post_;
+    }
+  }
+  const Act cat = cat_buf_.get(a.n, a.c + b.c, a.h, a.w);
+  concat_padded(a, b, top, left, cat);
+  return forward(cat);
 }
 
 void ConvBn::backward(const Act& x, const Act& dy, const Act* dx) {

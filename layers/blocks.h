@@ -29,14 +29,18 @@ class ConvBn {
   }
   void weights_changed() { conv.weights_changed(); }
   Act forward(const Act& x);  // the output lives in this unit until its next forward
+  // forward of [a, F.pad(b)] (layers::concat_padded's): under NoGrad in eval mode read in place
+  // where the convolution is a Winograd one, else concatenated into this unit's buffer first.
+  Act forward_cat(const Act& a, const Act& b, int top, int left);
   void backward(const Act& x, const Act& dy, const Act* dx);
   const Act& out() const { return post_; }
 
  private:
-  ActBuf pre_buf_, post_buf_, dpre_buf_;
+  ActBuf pre_buf_, post_buf_, dpre_buf_, cat_buf_;
   Act pre_, post_;
   bool folded_ = false;  // the last forward ran BN folded into the conv (no backward possible)
   Floats scale_, shift_;
+  void fold();  // scale_ and shift_ from the BatchNorm's running statistics, unless packed
 };
 
 enum class ResidualKind { regular, down, up };

@@ -210,37 +210,66 @@ void Conv2d::pack_folded(const kernels::ConvShape& s, const float* scale, const 
   folded_ = true;
 }
 
+Conv2d::FoldedPath Conv2d::folded_path(const kernels::ConvShape& s, bool winograd) const {
+  if (spec_.transposed) return FoldedPath::direct;
+  if (takes_bf16(s)) return FoldedPath::amx;
+  if (!winograd || !fold_wino_.size() || !winograd_allowed()) return FoldedPath::direct;
+  if (kernels::winograd_bf16_pays(s) && bf16_path() == Bf16Path::winograd) return FoldedPath::winograd_bf16;
+  return kernels::winograd_pays(s) ? FoldedPath::winograd : FoldedPath::direct;
+}
+
+void Conv2d::pack_winograd_bf16(const kernels::ConvShape& s) {
+  if (!fold_wino_bf16_.empty()) return;
+  fold_wino_bf16_.resize(kernels::winograd_bf16_weight_halves(s));
+  kernels::pack_winograd_bf16_weights(s, fold_wino_.data(), fold_wino_bf16_.data());
+}
+
 void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd,
                             bool relu) {
   check_io(x, y);
   kernels::ConvShape s = conv_shape(x);
-  const bool bf16 = !spec_.transposed && takes_bf16(s);
   pack_folded(s, scale, shift);
-  if (bf16 && fold_bf16_.empty()) {
+  const FoldedPath path = folded_path(s, winograd);
+  if (path == FoldedPath::amx && fold_bf16_.empty()) {
     Floats w(weight.numel());
     kernels::unpack_conv_weights(s, fold_w_.data(), w.data());
     fold_bf16_.resize(kernels::conv_bf16_weight_halves(s));
     kernels::pack_conv_bf16_weights(s, w.data(), fold_bf16_.data());
   }
-  if (bf16) {
+  if (path == FoldedPath::amx || path == FoldedPath::winograd_bf16) {
     s.relu = relu;
     record(x, y, s);
-    kernels::conv_fwd_bf16_amx(s, x.data, fold_bf16_.data(), fold_bias16_.data(), y.data);
-    return;
-  }
-  if (winograd && fold_wino_.size() && winograd_allowed() && kernels::winograd_bf16_pays(s) &&
-      bf16_path() == Bf16Path::winograd) {
-    if (fold_wino_bf16_.empty()) {
-      fold_wino_bf16_.resize(kernels::winograd_bf16_weight_halves(s));
-      kernels::pack_winograd_bf16_weights(s, fold_wino_.data(), fold_wino_bf16_.data());
+    if (path == FoldedPath::amx) {
+      kernels::conv_fwd_bf16_amx(s, x.data, fold_bf16_.data(), fold_bias16_.data(), y.data);
+    } else {
+      pack_winograd_bf16(s);
+      kernels::conv_fwd_winograd_bf16(s, x.data, fold_wino_bf16_.data(), fold_bias16_.data(), y.data);
     }
-    s.relu = relu;
-    record(x, y, s);
-    kernels::conv_fwd_winograd_bf16(s, x.data, fold_wino_bf16_.data(), fold_bias16_.data(), y.data);
     return;
   }
   run_forward(x, y, fold_w_.data(), fold_wino_.size() ? fold_wino_.data() : nullptr, fold_bias16_.data(), winograd,
               relu);
+}
+
+bool Conv2d::forward_folded_cat(const Act& a, const Act& b, int top, int left, const Act& y, const float* scale,
+                                const float* shift, bool relu) {
+  const Act x{nullptr, a.n, a.c + b.c, a.h, a.w};
+  check_io(x, y);
+  kernels::ConvShape s = conv_shape(x);
+  const kernels::ConcatInput in{a.data, a.c, b.data, b.c, b.h, b.w, top, left};
+  if (b.n != a.n || !kernels::winograd_cat_applicable(s, in)) return false;
+  pack_folded(s, scale, shift);
+  const FoldedPath path = folded_path(s, true);
+  if (path != FoldedPath::winograd && path != FoldedPath::winograd_bf16) return false;
+  s.relu = relu;
+  record(x, y, s);
+  if (path == FoldedPath::winograd_bf16) {
+    pack_winograd_bf16(s);
+    kernels::conv_fwd_winograd_bf16_cat(s, in, fold_wino_bf16_.data(), fold_bias16_.data(), y.data);
+  } else {
+    kernels::conv_kernels().fwd_winograd_cat(s, in, fold_wino_.data(), fold_bias16_.data(), y.data);
+  }
+  return true;
 }
 
 void Conv2d::backward(const Act& x, const Act& dy, const Act* dx) {

@@ -91,6 +91,11 @@ class Conv2d {
   // max(0, ...) in the same pass (the kernels' store), as a ReLU after the BatchNorm.
   void forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd = true,
                       bool relu = false);
+  // forward_folded of [a, F.pad(b)] (b at (top, left) of a's size, zeros around it: the
+  // U-Net's up path), read in place where the folded forward is a Winograd one
+  // (kernels::winograd_cat_applicable); false, nothing written, where it is not.
+  bool forward_folded_cat(const Act& a, const Act& b, int top, int left, const Act& y, const float* scale,
+                          const float* shift, bool relu);
   void fold_changed() { folded_ = false; }
   bool fold_packed() const { return folded_; }  // forward_folded will not read scale and shift
   // Adds dL/dweight (and dL/dbias) to the gradients; writes dx when dx is non-null.
@@ -112,6 +117,9 @@ class Conv2d {
   void check_io(const Act& x, const Act& y) const;
   void record(const Act& x, const Act& y, const kernels::ConvShape& s) const;  // conv_flops, conv_trace
   void pack_folded(const kernels::ConvShape& s, const float* scale, const float* shift);
+  enum class FoldedPath { direct, winograd, winograd_bf16, amx };  // direct: run_forward decides
+  FoldedPath folded_path(const kernels::ConvShape& s, bool winograd) const;  // after pack_folded
+  void pack_winograd_bf16(const kernels::ConvShape& s);
   void run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* bias, bool winograd,
                    bool relu = false);
 };

@@ -255,6 +255,15 @@ void randomise_bn_stats(ParamList& params, unsigned seed) {
   }
 }
 
+// A ConvBn initialised by seed with BatchNorm statistics drawn by stats_seed, packed anew.
+void init_with_stats(ConvBn& b, unsigned seed, unsigned stats_seed) {
+  b.init(seed);
+  ParamList params;
+  b.params("conv.", "bn.", params);
+  randomise_bn_stats(params, stats_seed);
+  b.weights_changed();
+}
+
 // Eval-mode output with gradients enabled (BN as its own pass) against the same forward
 // under NoGrad (BN folded into the conv); a backward after the folded forward must refuse.
 template <class Block>
@@ -339,11 +348,7 @@ TEST_CASE("ConvBn folded under Bf16Convs: bf16 on AMX for k > 1 stride 1, Winogr
                         Case{{20, 24, 3, 2, 1}, false, false}}) {
     INFO("in " << c.spec.in << " out " << c.spec.out << " k " << c.spec.k << " stride " << c.spec.stride);
     ConvBn b(c.spec, true);
-    b.init(21);
-    ParamList params;
-    b.params("conv.", "bn.", params);
-    randomise_bn_stats(params, 5);
-    b.weights_changed();
+    init_with_stats(b, 21, 5);
     b.set_training(false);
     Owned x(1, c.spec.in, 19, 23, 8);
     NoGrad no_grad;
@@ -425,4 +430,37 @@ TEST_CASE("a 2x2/2 transposed Conv2d under NoGrad and Bf16Convs runs in bf16 (AM
     zscale = std::max(zscale, double(std::fabs(z.mem[i])));
   }
   CHECK(zworst / zscale < 2e-2);
+}
+
+// The U-Net's up path: [skip, F.pad(up)] read in place by a Winograd convolution equals the
+// same ConvBn over the copied concatenation bit for bit, in fp32 and in bf16 (whichever path
+// the CPU takes), and falls back to the copy where it cannot (training, a strided conv,
+// channels of a not a multiple of 8).
+TEST_CASE("ConvBn forward_cat equals forward of the concatenation, in place or copied", "[layers][blocks][concat]") {
+  struct Case {
+    ConvSpec spec;
+    int a_c, h, w, b_h, b_w, top, left;
+  };
+  for (const Case& c : {Case{{48, 24, 3, 1, 1}, 24, 23, 30, 22, 29, 1, 0}, Case{{96, 48, 3, 1, 1}, 48, 12, 15, 12, 14, 0, 1},
+                        Case{{29, 16, 3, 1, 1}, 24, 9, 13, 8, 12, 1, 1}, Case{{32, 24, 3, 2, 1}, 16, 10, 9, 10, 9, 0, 0},
+                        Case{{30, 16, 3, 1, 1}, 12, 11, 8, 10, 8, 1, 0}}) {
+    INFO(c.a_c << " + " << c.spec.in - c.a_c << " channels, out " << c.spec.out << " stride " << c.spec.stride);
+    ConvBn bn(c.spec, true);
+    init_with_stats(bn, 31, 6);
+    Owned a(1, c.a_c, c.h, c.w, 41), b(1, c.spec.in - c.a_c, c.b_h, c.b_w, 42);
+    Owned cat(1, c.spec.in, c.h, c.w, 43);
+    concat_padded(a.act, b.act, c.top, c.left, cat.act);
+    for (bool training : {false, true})
+      for (bool bf16 : {false, true}) {
+        INFO("training " << training << " bf16 " << bf16);
+        bn.set_training(training);
+        const Bf16Convs precision(bf16);
+        NoGrad no_grad;
+        const Act y = bn.forward(cat.act);
+        const std::vector<float> copied(y.data, y.data + y.floats());
+        const Act y2 = bn.forward_cat(a.act, b.act, c.top, c.left);
+        REQUIRE(y2.floats() == copied.size());
+        CHECK(std::memcmp(y2.data, copied.data(), copied.size() * sizeof(float)) == 0);
+      }
+  }
 }
