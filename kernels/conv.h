@@ -57,7 +57,8 @@ struct ConcatInput {
 };
 // Whether fwd_winograd_cat reads it in place: winograd_applicable(s), n 1, s.ic = a_c + b_c,
 // a_c % 8 == 0 (a native vector never takes lanes of both but on 16 lanes, where a block of
-// a_c % 16 == 8 joins two halves), and b inside the input.
+// a_c % 16 == 8 joins two halves), no input block past b's (a_c % 16 == 8 with b_c % 16 in 1..8
+// is refused), and b inside the input.
 bool winograd_cat_applicable(const ConvShape& s, const ConcatInput& in);
 // The two as one map of s.ic channels (x_floats of s): what layers::concat_padded makes.
 void concat_input(const ConvShape& s, const ConcatInput& in, float* x);

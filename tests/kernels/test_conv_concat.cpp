@@ -37,7 +37,7 @@ const CatCase kCatCases[] = {
     {24, 24, 9, 14, 8, 13, 0, 1, 16, false},  {16, 16, 10, 9, 10, 9, 0, 0, 20, true},
     {32, 8, 7, 12, 6, 12, 1, 0, 40, false},   {8, 40, 11, 6, 11, 5, 0, 1, 8, false},
     {24, 5, 9, 9, 8, 8, 1, 1, 24, true},      {48, 48, 8, 10, 8, 10, 0, 0, 24, false},
-    {40, 27, 6, 7, 5, 6, 1, 1, 13, false},
+    {40, 24, 6, 7, 5, 6, 1, 1, 13, false},    {8, 24, 7, 9, 7, 9, 0, 0, 16, true},
 };
 
 struct CatInputs {
@@ -136,6 +136,10 @@ TEST_CASE("Winograd in place refuses inputs the two maps do not make", "[kernels
   };
   CHECK(refused([](ConvShape&, ConcatInput& in) { in.a_c = 20; in.b_c = 28; }));  // a's channels not a multiple of 8
   CHECK(refused([](ConvShape&, ConcatInput& in) { in.b_c = 23; }));               // channels do not add up
+  // 24 + 5 is taken (the input's second block: a's channels 16-23, then b's 0-4); 40 + 27 is
+  // not: an 8-lane vector of the input's last block (channels 72-79) would lie past b's two.
+  CHECK_FALSE(refused([](ConvShape& s2, ConcatInput& in) { in.b_c = 5; s2.ic = 29; }));
+  CHECK(refused([](ConvShape& s2, ConcatInput& in) { in.a_c = 40; in.b_c = 27; s2.ic = 67; }));
   CHECK(refused([](ConvShape&, ConcatInput& in) { in.top = 2; }));                // b past the bottom
   CHECK(refused([](ConvShape&, ConcatInput& in) { in.left = -1; }));
   CHECK(refused([](ConvShape&, ConcatInput& in) { in.b = nullptr; }));
