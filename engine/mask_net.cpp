@@ -23,9 +23,9 @@ void crop_from(const Act& big, const Act& small, int top, int left) {
 
 }  // namespace
 
-Act DoubleConv::forward(const Act& x) { return b_.forward(a_.forward(x)); }
+Act DoubleConv::forward(const Act& x) { return a_.forward_pair(b_, x); }
 Act DoubleConv::forward_cat(const Act& a, const Act& b, int top, int left) {
-  return b_.forward(a_.forward_cat(a, b, top, left));
+  return a_.forward_cat_pair(b_, a, b, top, left);
 }
 void DoubleConv::backward(const Act& x, const Act& dy, const Act& dx) {
   const Act da = da_.like(a_.out());

@@ -168,6 +168,43 @@ void conv_fwd_bf16_amx(const ConvShape& s, const float* x, const std::uint16_t* 
 #endif
 }
 
+bool conv_bf16_cat_applicable(const ConvShape& s, const ConcatInput& in) {
+  return conv_bf16_applicable(s) && s.n == 1 && in.a && in.b && in.a_c > 0 && in.b_c > 0 && in.a_c % 8 == 0 &&
+         s.ic == in.a_c + in.b_c && in.top >= 0 && in.left >= 0 && in.b_h > 0 && in.b_w > 0 &&
+         in.top + in.b_h <= s.ih && in.left + in.b_w <= s.iw;
+}
+
+void conv_fwd_bf16_amx_cat(const ConvShape& s, const ConcatInput& in, const std::uint16_t* w, const float* bias,
+                           float* y) {
+  if (!conv_bf16_cat_applicable(s, in))
+    throw std::invalid_argument("conv_fwd_bf16_amx_cat: the two maps do not make a stride-1 input of one image");
+  if (!amx_bf16_available()) throw std::logic_error("conv_fwd_bf16_amx_cat: this CPU or OS gives no AMX-BF16");
+#if defined(YELAN_AMX_BUILT)
+  amx_bf16_kernels.conv_cat(s, in, w, bias, y);
+#else
+  (void)w; (void)bias; (void)y;
+#endif
+}
+
+bool conv_bf16_pair_applicable(const ConvShape& s1, const ConvShape& s2) {
+  return conv_bf16_applicable(s1) && conv_bf16_applicable(s2) && s2.n == s1.n && s2.ic == s1.oc &&
+         s2.ih == s1.oh() && s2.iw == s1.ow();
+}
+
+void conv_pair_fwd_bf16_amx(const ConvShape& s1, const ConcatInput& in, const std::uint16_t* w1, const float* bias1,
+                            const ConvShape& s2, const std::uint16_t* w2, const float* bias2, float* y) {
+  if (!conv_bf16_pair_applicable(s1, s2))
+    throw std::invalid_argument("conv_pair_fwd_bf16_amx: two stride-1 convolutions, the second taking the first's output");
+  if (in.b ? !conv_bf16_cat_applicable(s1, in) : !in.a || in.a_c != s1.ic)
+    throw std::invalid_argument("conv_pair_fwd_bf16_amx: the input does not make the first convolution's");
+  if (!amx_bf16_available()) throw std::logic_error("conv_pair_fwd_bf16_amx: this CPU or OS gives no AMX-BF16");
+#if defined(YELAN_AMX_BUILT)
+  amx_bf16_kernels.conv_pair(s1, in, w1, bias1, s2, w2, bias2, y);
+#else
+  (void)w1; (void)bias1; (void)w2; (void)bias2; (void)y;
+#endif
+}
+
 bool deconv2x2_bf16_applicable(const DeconvShape& d) {
   return d.valid() && d.kh == 2 && d.kw == 2 && d.stride == 2 && d.pad_h == 0 && d.pad_w == 0 && d.out_pad_h == 0 &&
          d.out_pad_w == 0;

@@ -41,6 +41,22 @@ void pack_conv_bf16_weights(const ConvShape& s, const float* w_oihw, std::uint16
 // Same contract as ConvKernels::fwd (bias may be null, s.relu fused). amx_bf16_available()
 // must hold; throws std::logic_error otherwise.
 void conv_fwd_bf16_amx(const ConvShape& s, const float* x, const std::uint16_t* w_bf16, const float* bias, float* y);
+// The same of two maps concatenated in channels, read in place: the copy into bf16 that the
+// tiles read is made straight from a and b (where a_c % 16 == 8 a block of each meets in one
+// vector), bit for bit the result on their copy (concat_input). Holds where conv_bf16 does
+// for one image of a_c + b_c channels, a_c a multiple of 8 and b inside the input.
+bool conv_bf16_cat_applicable(const ConvShape& s, const ConcatInput& in);
+void conv_fwd_bf16_amx_cat(const ConvShape& s, const ConcatInput& in, const std::uint16_t* w_bf16, const float* bias,
+                           float* y);
+// Two stride-1 convolutions in a row (the U-Net's double convolution): the first's outputs,
+// its bias and ReLU applied, are stored straight into the bf16 plane the second reads, never
+// to memory in fp32 and back (a full-resolution map of 24 channels is 2.9 MB in fp32). Bit for
+// bit the two conv_fwd_bf16_amx calls: the same sums, rounded to bf16 once, where the second
+// call would have rounded them. in.b null: one map in.a of s1.ic channels; else the two maps
+// read in place (conv_bf16_cat_applicable). s2 takes s1's output (conv_bf16_pair_applicable).
+bool conv_bf16_pair_applicable(const ConvShape& s1, const ConvShape& s2);
+void conv_pair_fwd_bf16_amx(const ConvShape& s1, const ConcatInput& in, const std::uint16_t* w1, const float* bias1,
+                            const ConvShape& s2, const std::uint16_t* w2, const float* bias2, float* y);
 
 // The U-Net's up-sampling, a 2x2 stride-2 transposed convolution (no padding): per output
 // phase (dy, dx) a 1x1 convolution of the input, so one GEMM over the input's pixels with
@@ -55,6 +71,9 @@ void deconv2x2_fwd_bf16_amx(const DeconvShape& d, const float* x, const std::uin
 // What conv_bf16_amx.cpp exports: its kernels behind a table, as the ISA variant files do.
 struct AmxBf16Kernels {
   void (*conv)(const ConvShape& s, const float* x, const std::uint16_t* w, const float* bias, float* y);
+  void (*conv_cat)(const ConvShape& s, const ConcatInput& in, const std::uint16_t* w, const float* bias, float* y);
+  void (*conv_pair)(const ConvShape& s1, const ConcatInput& in, const std::uint16_t* w1, const float* bias1,
+                    const ConvShape& s2, const std::uint16_t* w2, const float* bias2, float* y);
   void (*deconv2x2)(const DeconvShape& d, const float* x, const std::uint16_t* w, const float* bias, float* y);
 };
 

@@ -52,6 +52,22 @@ Act ConvBn::forward_cat(const Act& a, const Act& b, int top, int left) {
   return forward(cat);
 }
 
+Act ConvBn::forward_then(ConvBn& next, const Act& a, const Act* b, int top, int left) {
+  if (!bn.training && !next.bn.training && !grad_enabled() && !conv.spec().transposed && !next.conv.spec().transposed) {
+    const Act mid = conv.out_shape(Act{nullptr, a.n, a.c + (b ? b->c : 0), a.h, a.w});
+    next.post_ = next.post_buf_.like(next.conv.out_shape(mid));
+    fold();
+    next.fold();
+    if (conv.forward_folded_pair(a, b, top, left, scale_.data(), shift_.data(), bn.fused_relu(), next.conv,
+                                 next.scale_.data(), next.shift_.data(), next.bn.fused_relu(), next.post_)) {
+      folded_ = next.folded_ = true;
+      post_ = mid;  // its shape: the values went to next in bf16
+      return next.post_;
+    }
+  }
+  return next.forward(b ? forward_cat(a, *b, top, left) : forward(a));
+}
+
 void ConvBn::backward(const Act& x, const Act& dy, const Act* dx) {
   if (folded_) throw std::logic_error("ConvBn: backward after a forward run under NoGrad");
   const Act dpre = dpre_buf_.like(pre_);

@@ -30,8 +30,15 @@ class ConvBn {
   void weights_changed() { conv.weights_changed(); }
   Act forward(const Act& x);  // the output lives in this unit until its next forward
   // forward of [a, F.pad(b)] (layers::concat_padded's): under NoGrad in eval mode read in place
-  // where the convolution is a Winograd one, else concatenated into this unit's buffer first.
+  // where the convolution is a Winograd or AMX one, else concatenated into this unit's buffer first.
   Act forward_cat(const Act& a, const Act& b, int top, int left);
+  // next.forward(forward(x)) and next.forward(forward_cat(a, b, ...)): under NoGrad in eval mode
+  // one AMX kernel where both convolutions run in bf16 there (Conv2d::forward_folded_pair; this
+  // unit's output then is not kept: out() holds its shape alone). The output lives in next.
+  Act forward_pair(ConvBn& next, const Act& x) { return forward_then(next, x, nullptr, 0, 0); }
+  Act forward_cat_pair(ConvBn& next, const Act& a, const Act& b, int top, int left) {
+    return forward_then(next, a, &b, top, left);
+  }
   void backward(const Act& x, const Act& dy, const Act* dx);
   const Act& out() const { return post_; }
 
@@ -41,6 +48,7 @@ class ConvBn {
   bool folded_ = false;  // the last forward ran BN folded into the conv (no backward possible)
   Floats scale_, shift_;
   void fold();  // scale_ and shift_ from the BatchNorm's running statistics, unless packed
+  Act forward_then(ConvBn& next, const Act& a, const Act* b, int top, int left);
 };
 
 enum class ResidualKind { regular, down, up };

@@ -224,22 +224,25 @@ void Conv2d::pack_winograd_bf16(const kernels::ConvShape& s) {
   kernels::pack_winograd_bf16_weights(s, fold_wino_.data(), fold_wino_bf16_.data());
 }
 
+void Conv2d::pack_amx_bf16(const kernels::ConvShape& s) {
+  if (!fold_bf16_.empty()) return;
+  Floats w(weight.numel());
+  kernels::unpack_conv_weights(s, fold_w_.data(), w.data());
+  fold_bf16_.resize(kernels::conv_bf16_weight_halves(s));
+  kernels::pack_conv_bf16_weights(s, w.data(), fold_bf16_.data());
+}
+
 void Conv2d::forward_folded(const Act& x, const Act& y, const float* scale, const float* shift, bool winograd,
                             bool relu) {
   check_io(x, y);
   kernels::ConvShape s = conv_shape(x);
   pack_folded(s, scale, shift);
   const FoldedPath path = folded_path(s, winograd);
-  if (path == FoldedPath::amx && fold_bf16_.empty()) {
-    Floats w(weight.numel());
-    kernels::unpack_conv_weights(s, fold_w_.data(), w.data());
-    fold_bf16_.resize(kernels::conv_bf16_weight_halves(s));
-    kernels::pack_conv_bf16_weights(s, w.data(), fold_bf16_.data());
-  }
   if (path == FoldedPath::amx || path == FoldedPath::winograd_bf16) {
     s.relu = relu;
     record(x, y, s);
     if (path == FoldedPath::amx) {
+      pack_amx_bf16(s);
       kernels::conv_fwd_bf16_amx(s, x.data, fold_bf16_.data(), fold_bias16_.data(), y.data);
     } else {
       pack_winograd_bf16(s);
@@ -257,18 +260,50 @@ bool Conv2d::forward_folded_cat(const Act& a, const Act& b, int top, int left, c
   check_io(x, y);
   kernels::ConvShape s = conv_shape(x);
   const kernels::ConcatInput in{a.data, a.c, b.data, b.c, b.h, b.w, top, left};
-  if (b.n != a.n || !kernels::winograd_cat_applicable(s, in)) return false;
+  if (b.n != a.n) return false;
   pack_folded(s, scale, shift);
   const FoldedPath path = folded_path(s, true);
-  if (path != FoldedPath::winograd && path != FoldedPath::winograd_bf16) return false;
+  const bool in_place = path == FoldedPath::amx ? kernels::conv_bf16_cat_applicable(s, in)
+                        : path == FoldedPath::direct ? false
+                                                     : kernels::winograd_cat_applicable(s, in);
+  if (!in_place) return false;
   s.relu = relu;
   record(x, y, s);
-  if (path == FoldedPath::winograd_bf16) {
+  if (path == FoldedPath::amx) {
+    pack_amx_bf16(s);
+    kernels::conv_fwd_bf16_amx_cat(s, in, fold_bf16_.data(), fold_bias16_.data(), y.data);
+  } else if (path == FoldedPath::winograd_bf16) {
     pack_winograd_bf16(s);
     kernels::conv_fwd_winograd_bf16_cat(s, in, fold_wino_bf16_.data(), fold_bias16_.data(), y.data);
   } else {
     kernels::conv_kernels().fwd_winograd_cat(s, in, fold_wino_.data(), fold_bias16_.data(), y.data);
   }
+  return true;
+}
+
+bool Conv2d::forward_folded_pair(const Act& a, const Act* b, int top, int left, const float* scale, const float* shift,
+                                 bool relu, Conv2d& next, const float* next_scale, const float* next_shift,
+                                 bool next_relu, const Act& y) {
+  const Act x{nullptr, a.n, a.c + (b ? b->c : 0), a.h, a.w};
+  check_io(x, out_shape(x));
+  const Act mid = out_shape(x);
+  next.check_io(mid, y);
+  kernels::ConvShape s1 = conv_shape(x), s2 = next.conv_shape(mid);
+  kernels::ConcatInput in{a.data, a.c};
+  if (b) in = {a.data, a.c, b->data, b->c, b->h, b->w, top, left};
+  if (spec_.transposed || next.spec_.transposed || !takes_bf16(s1) || !takes_bf16(s2) ||
+      !kernels::conv_bf16_pair_applicable(s1, s2) || (b && (b->n != a.n || !kernels::conv_bf16_cat_applicable(s1, in))))
+    return false;
+  pack_folded(s1, scale, shift);
+  next.pack_folded(s2, next_scale, next_shift);
+  pack_amx_bf16(s1);
+  next.pack_amx_bf16(s2);
+  s1.relu = relu;
+  s2.relu = next_relu;
+  record(x, mid, s1);
+  next.record(mid, y, s2);
+  kernels::conv_pair_fwd_bf16_amx(s1, in, fold_bf16_.data(), fold_bias16_.data(), s2, next.fold_bf16_.data(),
+                                  next.fold_bias16_.data(), y.data);
   return true;
 }
 

@@ -93,9 +93,17 @@ class Conv2d {
                       bool relu = false);
   // forward_folded of [a, F.pad(b)] (b at (top, left) of a's size, zeros around it: the
   // U-Net's up path), read in place where the folded forward is a Winograd one
-  // (kernels::winograd_cat_applicable); false, nothing written, where it is not.
+  // (kernels::winograd_cat_applicable) or AMX's (conv_bf16_cat_applicable); false, nothing
+  // written, where it is not.
   bool forward_folded_cat(const Act& a, const Act& b, int top, int left, const Act& y, const float* scale,
                           const float* shift, bool relu);
+  // forward_folded, then next.forward_folded of its output, as one AMX kernel where both take
+  // bf16 on AMX (kernels::conv_pair_fwd_bf16_amx: the output between them stays in bf16 and
+  // is not kept); b non-null: this convolution's input is [a, F.pad(b)] read in place. False,
+  // nothing written, elsewhere.
+  bool forward_folded_pair(const Act& a, const Act* b, int top, int left, const float* scale, const float* shift,
+                           bool relu, Conv2d& next, const float* next_scale, const float* next_shift, bool next_relu,
+                           const Act& y);
   void fold_changed() { folded_ = false; }
   bool fold_packed() const { return folded_; }  // forward_folded will not read scale and shift
   // Adds dL/dweight (and dL/dbias) to the gradients; writes dx when dx is non-null.
@@ -120,6 +128,7 @@ class Conv2d {
   enum class FoldedPath { direct, winograd, winograd_bf16, amx };  // direct: run_forward decides
   FoldedPath folded_path(const kernels::ConvShape& s, bool winograd) const;  // after pack_folded
   void pack_winograd_bf16(const kernels::ConvShape& s);
+  void pack_amx_bf16(const kernels::ConvShape& s);  // fold_bf16_ from fold_w_, once
   void run_forward(const Act& x, const Act& y, const float* w, const float* wino, const float* bias, bool winograd,
                    bool relu = false);
 };

@@ -464,3 +464,42 @@ TEST_CASE("ConvBn forward_cat equals forward of the concatenation, in place or c
       }
   }
 }
+
+// Two ConvBn units in a row under NoGrad: forward_pair (one AMX kernel where both convolutions
+// take bf16 on AMX, the output between them never leaving bf16) against the two forwards, bit
+// for bit, in fp32 and bf16, eval and training mode, and the same with the first's input
+// concatenated in place (forward_cat_pair); a strided first convolution falls back.
+TEST_CASE("ConvBn forward_pair equals two forwards, on AMX as one kernel", "[layers][blocks][pair]") {
+  struct Case {
+    ConvSpec first, second;
+    int a_c, h, w;  // a_c > 0: the first's input is a_c channels and a map of the rest, 1 row and column smaller
+  };
+  for (const Case& c : {Case{{6, 24, 3, 1, 1}, {24, 24, 3, 1, 1}, 0, 21, 26}, Case{{48, 24, 3, 1, 1}, {24, 24, 3, 1, 1}, 24, 23, 30},
+                        Case{{40, 48, 3, 1, 1}, {48, 17, 3, 1, 1}, 0, 9, 40}, Case{{24, 32, 3, 2, 1}, {32, 32, 3, 1, 1}, 0, 12, 14}}) {
+    INFO(c.first.in << " -> " << c.first.out << " (stride " << c.first.stride << ") -> " << c.second.out << ", a " << c.a_c);
+    ConvBn first(c.first, true), second(c.second, true);
+    init_with_stats(first, 31, 6);
+    init_with_stats(second, 32, 7);
+    const int b_c = c.first.in - c.a_c;
+    Owned x(1, c.first.in, c.h, c.w, 41), a(1, c.a_c ? c.a_c : 1, c.h, c.w, 42), b(1, b_c, c.h - 1, c.w - 1, 43);
+    Owned cat(1, c.first.in, c.h, c.w, 44);
+    if (c.a_c) concat_padded(a.act, b.act, 1, 0, cat.act);
+    const Act& in = c.a_c ? cat.act : x.act;
+    for (bool training : {false, true})
+      for (bool bf16 : {false, true}) {
+        INFO("training " << training << " bf16 " << bf16);
+        first.set_training(training);
+        second.set_training(training);
+        const Bf16Convs precision(bf16);
+        NoGrad no_grad;
+        const Act y = second.forward(first.forward(in));
+        const std::vector<float> two(y.data, y.data + y.floats());
+        const Act y2 = c.a_c ? first.forward_cat_pair(second, a.act, b.act, 1, 0) : first.forward_pair(second, in);
+        REQUIRE(y2.floats() == two.size());
+        CHECK(std::memcmp(y2.data, two.data(), two.size() * sizeof(float)) == 0);
+        // One kernel (the first's output not kept) exactly where both take bf16 on AMX.
+        const bool one_kernel = !training && bf16 && yelan::kernels::amx_bf16_enabled() && c.first.stride == 1;
+        CHECK((first.out().data == nullptr) == one_kernel);
+      }
+  }
+}

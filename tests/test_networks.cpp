@@ -466,8 +466,16 @@ TEST_CASE("mask net forward_cropped under run.bf16: the bf16 forward of the fram
   double worst = 0;
   for (std::size_t i = 0; i < crop.masks.size(); ++i)
     worst = std::max(worst, double(std::abs(crop.masks[i] - full_inside.masks[i])));
-  INFO("logits spread " << (*hi - *lo) << ", worst " << worst);
-  CHECK(worst < 0.03 * double(*hi - *lo));
+  // In fp32 the box's run differs from the forward of the emptied frame by the halo's
+  // truncation alone (3.0% of the spread on this net: an AMX CPU's bf16 run, 3.01%, failed a
+  // bound of 3% that held elsewhere); bf16 adds its rounding, bounded as the whole net's is.
+  plain.forward(inside.act);
+  const MaskOut plain_inside(plain);
+  double worst_fp32 = 0;
+  for (std::size_t i = 0; i < crop.masks.size(); ++i)
+    worst_fp32 = std::max(worst_fp32, double(std::abs(crop_fp32.masks[i] - plain_inside.masks[i])));
+  INFO("logits spread " << (*hi - *lo) << ", worst " << worst << ", in fp32 " << worst_fp32);
+  CHECK(worst < worst_fp32 + 0.03 * double(*hi - *lo));
   for (std::size_t i = 0; i < crop.scores.size(); ++i) CHECK(crop.scores[i] == Approx(full_inside.scores[i]).margin(1e-3));
   net.forward_cropped(x.act, {0, 0, 1024, 64});
   REQUIRE(MaskOut(net).masks == full.masks);

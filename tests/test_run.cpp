@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -261,6 +262,34 @@ TEST_CASE("run: presence is the calibrated probability of the mask's share, no p
     for (auto p = gap; p != poses.end(); ++p) {
       CHECK(p->confidence ==
             Approx(yelan::run::presence_probability_of_feature(by_hand.update(p->mask_share, p->t_us), 1, 4)).margin(1e-4));
+    }
+  }
+  // The volume takes the events between two ticks in one call (its K-specialised loop): the
+  // recording pushed as one span and one event at a time gives the same poses, bit for bit.
+  {
+    std::vector<yelan::camera::Event> ev;
+    auto reader = yelan::camera::open_event_file(d / "r.yelan.h5");
+    while (reader->read_until(ev, 200000, 1 << 20) > 0) {
+    }
+    std::vector<yelan::run::Pose> runs[2];
+    for (int one_by_one : {0, 1}) {
+      yelan::run::RunOptions o;
+      o.beta = 2;
+      yelan::run::PosePipeline pipe(std::string(YELAN_SOURCE_DIR) + "/models/default.h5", 346, 260, o);
+      const auto keep = [&](const yelan::run::Pose& p) { runs[one_by_one].push_back(p); };
+      if (one_by_one)
+        for (const yelan::camera::Event& e : ev) pipe.push(std::span<const yelan::camera::Event>(&e, 1), keep);
+      else
+        pipe.push(ev, keep);
+      pipe.finish(ev.back().t, keep);
+      CHECK(pipe.stats().events == ev.size());
+    }
+    REQUIRE(runs[0].size() >= 5);
+    REQUIRE(runs[0].size() == runs[1].size());
+    for (std::size_t i = 0; i < runs[0].size(); ++i) {
+      CHECK(runs[0][i].t_us == runs[1][i].t_us);
+      CHECK(std::memcmp(runs[0][i].joints_mm.data(), runs[1][i].joints_mm.data(), sizeof(runs[0][i].joints_mm)) == 0);
+      CHECK(runs[0][i].mask_share == runs[1][i].mask_share);
     }
   }
   // run.mask_cut is where stage 1's masks are cut: a higher cut never covers more of the

@@ -558,7 +558,8 @@ PosePipeline::~PosePipeline() = default;
 
 void PosePipeline::push(std::span<const camera::Event> events, const std::function<void(const Pose&)>& out) {
   Impl& m = *impl_;
-  for (const camera::Event& e : events) {
+  for (std::size_t i = 0; i < events.size();) {
+    const camera::Event& e = events[i];
     if (!m.started) {
       m.started = true;
       m.smoother.start_empty(e.t);
@@ -587,9 +588,15 @@ void PosePipeline::push(std::span<const camera::Event> events, const std::functi
       m.tick(m.next_tick, out);
       m.next_tick += m.dt_us;
     }
-    m.tore.update(e);
-    ++m.events_since;
-    ++m.stats.events;
+    // e and the events after it up to the next tick go into the volume in one call: its K-specialised
+    // loop (one event at a time, the FIFO shift of a runtime K was a library memmove per event, 7% of
+    // `yelan run` on a recording of 6 M events/s).
+    std::size_t j = i + 1;
+    while (j < events.size() && events[j].t <= m.next_tick) ++j;
+    m.tore.update(events.subspan(i, j - i));
+    m.events_since += j - i;
+    m.stats.events += j - i;
+    i = j;
   }
 }
 
