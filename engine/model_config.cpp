@@ -100,6 +100,7 @@ ModelConfig parse_model_config(const std::string& text, const std::string& where
     if (r.contains("mask_mirror") && r["mask_mirror"].is_number()) c.mask_mirror_doubt = get_num(r, where + ".run", "mask_mirror");
     else c.mask_mirror = get_bool_or(r, where + ".run", "mask_mirror", false);
     c.run_bf16 = get_bool_or(r, where + ".run", "bf16", false);
+    c.run_pose_bf16 = get_bool_or(r, where + ".run", "pose_bf16", false);
     if (r.contains("mask_max_age_bf16")) c.mask_max_age_bf16 = get_int(r, where + ".run", "mask_max_age_bf16");
     if (r.contains("mask_max_age_bf16_winograd"))
       c.mask_max_age_bf16_winograd = get_int(r, where + ".run", "mask_max_age_bf16_winograd");

@@ -109,6 +109,10 @@ struct ModelConfig {
   //   has them (Intel Sapphire Rapids and later; kernels/conv_bf16.h), fp32 elsewhere. The
   //   deployed path's (yelan run, eval --run, calibrate, bench run and early-exit); training and
   //   frame-by-frame eval stay fp32.
+  //   run.pose_bf16 (optional, default false): stage 2's convolutions likewise in bf16 where
+  //   the CPU has AMX (its 3x3 stride-1 ones; the rest, and every CPU without AMX, fp32): on
+  //   the default 1.9 against 2.6 ms a tick of stage 2 on one core, its poses the fp32 ones
+  //   on validation (+0.0 +- 0.0 mm paired; models/README.md, fifty-eighth session).
   //   run.mask_max_age_bf16 (optional, default run.mask_max_age): the age cap where stage 1
   //   does run in bf16: a stage 1 2.6 times cheaper affords running it more often within the
   //   same pose rate, and the fresher masks fit better.
@@ -117,6 +121,7 @@ struct ModelConfig {
   //   GEMMs in bf16 pairs (a quarter cheaper stage 1 on Zen 5), the rest in fp32.
   double run_beta = 0.99;
   bool run_bf16 = false;
+  bool run_pose_bf16 = false;
   std::optional<int> mask_max_age_bf16;
   std::optional<int> mask_max_age_bf16_winograd;
   int mask_max_age = 0;  // 0: none

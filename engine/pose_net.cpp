@@ -73,13 +73,14 @@ PoseNet::CropBox PoseNet::forward_cropped(const Act& x, CropBox box, int S) {
   if (bn1_.training) throw std::logic_error("pose net: forward_cropped is for inference (set_training(false))");
   S_ = S;
   const int H = x.h, W = x.w, F = cfg_.resnet_mid();
-  if (!have_zero_feat_) {
+  if (!have_zero_feat_ || zero_feat_bf16_ != layers::bf16_active()) {  // the empty frame's, in this run's precision
     Act zero_in = crop_buf_.get(1, x.c, H, W);
     zero(zero_in);
     const Act z = head_forward(zero_in);
     const Act keep = zero_feat_buf_.like(z);
     std::memcpy(keep.data, z.data, z.floats() * sizeof(float));
     have_zero_feat_ = true;
+    zero_feat_bf16_ = layers::bf16_active();
   }
   const Act z0 = zero_feat_buf_.get(1, F, mid_h_, mid_w_);
   feats_ = full_feat_buf_.get(x.n, F, mid_h_, mid_w_);

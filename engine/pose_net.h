@@ -120,6 +120,7 @@ class PoseNet : public layers::Module<PoseNet> {
   // forward_cropped: the head's features for an all-zero frame, the crop and the full map
   layers::ActBuf zero_feat_buf_, crop_buf_, full_feat_buf_;
   bool have_zero_feat_ = false, cropped_ = false;
+  bool zero_feat_bf16_ = false;  // the precision zero_feat_buf_ was made in (layers::bf16_active)
   // backward only, each dL/d the activation it is named after
   layers::ActBuf d_inp_;            // a stage's input (every stage adds to the next one's)
   layers::ActBuf d_dsnt_[3];        // the last stage's probabilities through the joints (xy, zy, xz)

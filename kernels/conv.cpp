@@ -216,9 +216,9 @@ void fwd_winograd_cat_scalar(const ConvShape& s, const ConcatInput& in, const fl
 bool winograd_cat_applicable(const ConvShape& s, const ConcatInput& in) {
   // The input's blocks past a must lie within b's: else an 8-lane vector of the input's last
   // block would read past b's storage (a_c % 16 == 8 with b's last block more than half full).
-  const int blocks_past_a = s.icb() * kBlock - in.a_c, b_blocks = (in.b_c + kBlock - 1) / kBlock * kBlock;
+  const int lanes_past_a = s.icb() * kBlock - in.a_c, b_lanes = (in.b_c + kBlock - 1) / kBlock * kBlock;
   return winograd_applicable(s) && s.n == 1 && in.a && in.b && in.a_c > 0 && in.b_c > 0 && in.a_c % 8 == 0 &&
-         s.ic == in.a_c + in.b_c && blocks_past_a <= b_blocks && in.top >= 0 && in.left >= 0 && in.b_h > 0 &&
+         s.ic == in.a_c + in.b_c && lanes_past_a <= b_lanes && in.top >= 0 && in.left >= 0 && in.b_h > 0 &&
          in.b_w > 0 && in.top + in.b_h <= s.ih && in.left + in.b_w <= s.iw;
 }
 

@@ -1449,6 +1449,50 @@ TEST_CASE("run: run.bf16 runs stage 1 in bf16 where the CPU has AMX or AVX512-BF
   CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--bf16", "on"}).code == 2);
 }
 
+// run.pose_bf16 (and --pose-bf16) runs stage 2's 3x3 convolutions in bf16 where the CPU has AMX:
+// poses that differ from fp32's by rounding alone; elsewhere the fp32 run itself.
+TEST_CASE("run: run.pose_bf16 runs stage 2 in bf16 on AMX alone", "[run][cli]") {
+  yelan::test::CliTempDir d("pose-bf16");
+  const std::vector<std::string> recs = dancer_and_empty(d);
+  const std::string w = std::string(YELAN_SOURCE_DIR) + "/models/default.h5";
+  const bool amx = yelan::layers::bf16_path_if(true) == yelan::layers::Bf16Path::amx;
+  std::ostringstream progress;
+  const auto run = [&](bool pose_bf16) {
+    yelan::run::RunOptions o;
+    o.pose_bf16 = pose_bf16;
+    return yelan::run::evaluate_recordings(w, recs, 0.6, 0.1, o, progress, true);
+  };
+  const auto fp32 = run(false), bf16 = run(true);
+  CHECK_FALSE(fp32.stage2_bf16);
+  CHECK(bf16.stage2_bf16 == amx);
+  REQUIRE(fp32.poses.size() == bf16.poses.size());
+  REQUIRE(fp32.poses.size() >= 5);
+  double worst = 0;
+  bool differ = false;
+  for (std::size_t i = 0; i < fp32.poses.size(); ++i) {
+    const auto &a = fp32.poses[i].pose, &b = bf16.poses[i].pose;
+    REQUIRE(a.person == b.person);
+    if (!a.person) continue;
+    for (int j = 0; j < 13; ++j)
+      for (int k = 0; k < 3; ++k) {
+        worst = std::max(worst, double(std::abs(a.joints_mm[j][k] - b.joints_mm[j][k])));
+        differ = differ || a.joints_mm[j][k] != b.joints_mm[j][k];
+      }
+  }
+  INFO("worst joint coordinate difference " << worst << " mm");
+  CHECK(differ == amx);
+  CHECK(worst < 20);  // rounding, not another pose (the validation set: +0.0 +- 0.0 mm paired)
+  // The config key and the flag, checked as every run key is.
+  const std::string cfg = slurp(std::string(YELAN_SOURCE_DIR) + "/benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s55.json");
+  CHECK_FALSE(yelan::parse_model_config(cfg, "s55").run_pose_bf16);
+  CHECK(yelan::parse_model_config(yelan::with_run_setting(cfg, "pose_bf16", "true"), "x").run_pose_bf16);
+  CHECK_THROWS_AS(yelan::with_run_setting(cfg, "pose_bf16", "3"), yelan::ConfigError);
+  const auto bad = run_cli({"eval", "--run", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--pose-bf16", "maybe"});
+  CHECK(bad.code == 2);
+  CHECK_THAT(bad.err, Catch::Contains("--pose-bf16 expects on or off, got 'maybe'"));
+  CHECK(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--seconds", "0.6", "--pose-bf16", "on"}).code == 2);
+}
+
 TEST_CASE("run: mask.crop_margin runs stage 1 on its last masks' box while a dancer is there, the whole frame while nobody is", "[run][cli]") {
   yelan::test::CliTempDir d("mask-crop");
   const std::vector<std::string> recs = dancer_and_empty(d);

@@ -46,7 +46,7 @@ std::string random_weights(const std::string& config, const std::string& dir) {
 }  // namespace
 
 int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
-  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights", "--crop-margin", "--bf16", "--mask-max-age"}, {"--json", "--no-torch", "--whole-tore"});
+  cli::Args args("bench run", argv, {"--configs", "--threads-list", "--rate", "--seconds", "--beta", "--weights", "--crop-margin", "--bf16", "--pose-bf16", "--mask-max-age"}, {"--json", "--no-torch", "--whole-tore"});
   args.expect_positionals(0, 0);
   const double rate = args.number_or("--rate", 50, 0, 10000, true), seconds = args.number_or("--seconds", 2, 0, 3600, true);
   // Absent: each model's own run.beta (its shipped setting; 0.99, the paper's, without one).
@@ -86,6 +86,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       o.crop_margin = crop_margin;
       o.tore_box = !args.flag("--whole-tore");
       if (args.value("--bf16")) o.bf16 = args.on_off("--bf16");
+      if (args.value("--pose-bf16")) o.pose_bf16 = args.on_off("--pose-bf16");
       if (args.value("--mask-max-age")) o.mask_max_age = args.int_value_or("--mask-max-age", 0, 0, 1000);
       run::PosePipeline pipe(wpath, 346, 260, o);
       std::uint64_t n = 0;
@@ -101,7 +102,7 @@ int run_pipeline_bench(const std::vector<std::string>& argv, std::ostream& out, 
       for (std::size_t i = 0; i < s.times.stage1_ms.size(); ++i) nets += s.times.stage1_ms[i] + s.times.stage2_ms[i];
       rows.back().nets_ms = nets / double(std::max<std::size_t>(1, s.times.stage1_ms.size()));
       rows.back().crop_share = run::crop_share(s);
-      err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s (stage 1 " << pipe.stage1_precision() << ", age cap " << pipe.mask_max_age() << "; beta " << pipe.beta()
+      err << "  " << pipe.config_name() << " x" << t << ": " << double(n) / wall << " poses/s (stage 1 " << pipe.stage1_precision() << (pipe.stage2_bf16() ? ", stage 2 bf16 on AMX" : "") << ", age cap " << pipe.mask_max_age() << "; beta " << pipe.beta()
           << "; TORE read in stage 2's box on " << s.tore_box_ticks << " of " << s.ticks << " ticks, "
           << 100 * s.tore_box_area / double(std::max<std::uint64_t>(1, s.tore_box_ticks)) << "% of the frame; TORE mean "
           << std::accumulate(s.times.tore_ms.begin(), s.times.tore_ms.end(), 0.0) / double(std::max<std::size_t>(1, s.times.tore_ms.size())) << " ms)\n";

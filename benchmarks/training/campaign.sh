@@ -971,6 +971,10 @@ case "$what" in
   ship-s55)
     "$Y" weights combine --mask models/campaign/mask-s52/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
       --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s55.json -o models/default.h5 ;;
+  # The default since the fifty-eighth session: -s55's, stage 2 in bf16 too on AMX (run.pose_bf16).
+  ship-s58)
+    "$Y" weights combine --mask models/campaign/mask-s52/checkpoint.h5 --pose models/campaign/pose-s35/checkpoint.h5 \
+      --config benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s58.json -o models/default.h5 ;;
   combine)
     "$Y" weights combine --mask "$RUNS/${MASK_RUN:-mask-s2}/best.h5" --pose "$RUNS/pose-p0125/best.h5" --config "$CFG" \
       -o models/default.h5 ;;

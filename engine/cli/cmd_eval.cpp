@@ -59,6 +59,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
   if (a.value("--mask-max-age")) o.mask_max_age = a.int_value_or("--mask-max-age", 0, 0, 1000);
   if (a.value("--mask-crop-margin")) o.mask_crop_margin = a.int_value_or("--mask-crop-margin", 0, 0, 4096);
   if (a.value("--bf16")) o.bf16 = a.on_off("--bf16");
+  if (a.value("--pose-bf16")) o.pose_bf16 = a.on_off("--pose-bf16");
   o.mask_grow = spec.mask_grow;
   const bool keep = a.value("--poses").has_value();
   run::StreamEvalResult r;
@@ -88,7 +89,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
       << std::setprecision(3) << r.deployed.pck150 << std::setprecision(1) << "; with the true head depth: MPJPE "
       << r.paper.mpjpe_mm << " mm, root-aligned " << r.paper.mpjpe_root_mm << " mm";
   t << "; stage 1 on " << std::setprecision(0) << 100 * r.mask_run_fraction << "% of ticks ("
-    << r.stage1_precision << ", age cap " << r.mask_max_age << ")";
+    << r.stage1_precision << (r.stage2_bf16 ? ", stage 2 bf16 on AMX" : "") << ", age cap " << r.mask_max_age << ")";
   if (r.mirror_runs) t << " (mirrored too on " << std::setprecision(1) << 100 * r.mirror_run_fraction << "%)";
   if (r.mask_crop_runs)
     t << " (on " << std::setprecision(1) << 100 * r.mask_crop_share << "% of the frame on the " << r.mask_crop_runs << " runs on a crop)";
@@ -130,6 +131,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
                              ", \"mask_run_fraction\": " + std::to_string(r.mask_run_fraction) +
                              ", \"stage1_bf16\": " + std::string(r.stage1_bf16 ? "true" : "false") +
                              ", \"stage1_precision\": \"" + r.stage1_precision + "\"" +
+                             ", \"stage2_bf16\": " + std::string(r.stage2_bf16 ? "true" : "false") +
                              ", \"mask_max_age\": " + std::to_string(r.mask_max_age) +
                              ", \"mirror_run_fraction\": " + std::to_string(r.mirror_run_fraction) +
                              ", \"mask_crop_runs\": " + std::to_string(r.mask_crop_runs) +
@@ -155,7 +157,7 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
 int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostream& err) {
   const Args a("eval", argv, {"--weights", "--sim", "--data", "--seed", "--scenes", "--json", "--seconds", "--threads", "--history", "--beta", "--skip",
                 "--low-light-dn", "--poses", "--depth-tau", "--pose-tau", "--mask-pictures", "--mask-grow", "--mask-max-age",
-                 "--mask-crop-margin", "--bf16"},
+                 "--mask-crop-margin", "--bf16", "--pose-bf16"},
                {"--true-mask", "--no-floors", "--run", "--unframed", "--frame-zoom", "--no-early-exit"});
   a.expect_positionals(0, 0);
   const auto wpath = a.value("--weights"), simv = a.value("--sim"), data = a.value("--data");
@@ -168,6 +170,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (a.value("--mask-max-age") && !a.flag("--run")) throw UsageError("--mask-max-age is for eval --run (the deployed path)");
   if (a.value("--mask-crop-margin") && !a.flag("--run")) throw UsageError("--mask-crop-margin is for eval --run (the deployed path)");
   if (a.value("--bf16") && !a.flag("--run")) throw UsageError("--bf16 is for eval --run (the deployed path)");
+  if (a.value("--pose-bf16") && !a.flag("--run")) throw UsageError("--pose-bf16 is for eval --run (the deployed path)");
   if (a.flag("--no-early-exit") && !a.flag("--run"))
     throw UsageError("--no-early-exit is for eval --run (frame by frame, stage 1 runs on every frame)");
   if (const auto p = a.value("--poses")) {

@@ -69,7 +69,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   const CameraChoice cam = take_camera(argv);
   const Args a("run", argv, {"--weights", "--rate", "--out", "--beta", "--height-mm", "--depth-mm", "--depth-tau", "--pose-tau", "--idle-recheck", "--threads",
                              "--mask-mirror", "--mask-max-age", "--stats-json", "--viz", "--viz-every", "--duration", "--crop-margin",
-                             "--mask-crop-margin", "--bf16"},
+                             "--mask-crop-margin", "--bf16", "--pose-bf16"},
                {"--no-early-exit", "--keep-empty"});
   a.expect_positionals(0, 1);
   const auto w = a.value("--weights");
@@ -116,6 +116,7 @@ int cmd_run(const std::vector<std::string>& argv_in, std::ostream& out, std::ost
   if (a.value("--idle-recheck")) opt.idle_recheck_s = a.number_or("--idle-recheck", 0, 0, 1);
   if (a.value("--mask-max-age")) opt.mask_max_age = a.int_value_or("--mask-max-age", 0, 0, 1000);
   if (a.value("--bf16")) opt.bf16 = a.on_off("--bf16");
+  if (a.value("--pose-bf16")) opt.pose_bf16 = a.on_off("--pose-bf16");
   if (a.value("--mask-mirror")) opt.mask_mirror_doubt = a.number_or("--mask-mirror", 0, 0, 0.499);
   opt.skip_empty = !a.flag("--keep-empty");
   if (a.value("--crop-margin")) opt.crop_margin = a.int_value_or("--crop-margin", 0, 0, 4096);

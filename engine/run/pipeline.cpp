@@ -143,6 +143,7 @@ struct PosePipeline::Impl {
   JointSmoother joint_smoother;
   double beta = 0.99;
   layers::Bf16Path stage1_path = layers::Bf16Path::none;  // run.bf16 or RunOptions::bf16, and the CPU
+  bool stage2_bf16 = false;  // run.pose_bf16 or RunOptions::pose_bf16, on AMX alone
   Pose last;
   bool have_last = false;
   RunStats stats;
@@ -184,6 +185,8 @@ struct PosePipeline::Impl {
     if (o.idle_recheck_s) nets.cfg.idle_recheck_s = *o.idle_recheck_s;
     nets.mask.set_bf16(o.bf16.value_or(cfg.run_bf16));
     stage1_path = layers::bf16_path_if(nets.mask.bf16());
+    // On AMX alone: stage 2's maps are small, and bf16 pairs on AVX512-BF16 were not measured there.
+    stage2_bf16 = o.pose_bf16.value_or(cfg.run_pose_bf16) && layers::bf16_path_if(true) == layers::Bf16Path::amx;
     if (stage1_path == layers::Bf16Path::amx && cfg.mask_max_age_bf16) nets.cfg.mask_max_age = *cfg.mask_max_age_bf16;
     if (stage1_path == layers::Bf16Path::winograd && cfg.mask_max_age_bf16_winograd)
       nets.cfg.mask_max_age = *cfg.mask_max_age_bf16_winograd;
@@ -216,6 +219,7 @@ struct PosePipeline::Impl {
     if (cfg.runs_stage1() && cfg.mask_mirror_doubt > 0 && !cfg.mask_mirror) nets.mask.add_mirror(unmasked.act);
     const layers::Act& x = cfg.bidirectional ? window.act : frame.act;
     const int frames = cfg.bidirectional ? cfg.window : 1;
+    const layers::Bf16Convs precision(stage2_bf16);  // its weights packed, its empty frame made in its precision
     if (crop > 0) nets.pose.forward_cropped(x, {0, 0, x.w, x.h}, frames);
     else nets.pose.forward(x, frames);
     nets.pose.reset_stream();
@@ -390,6 +394,7 @@ struct PosePipeline::Impl {
   }
 
   void run_stage2(const layers::Act& x, int frames, const PoseNet::CropBox& box) {
+    const layers::Bf16Convs precision(stage2_bf16);
     if (crop <= 0) {
       nets.pose.forward(x, frames);
       return;
@@ -623,6 +628,7 @@ std::string PosePipeline::config_name() const { return impl_->nets.cfg.name; }
 std::array<double, 2> PosePipeline::presence_ab() const { return {impl_->nets.cfg.presence_a, impl_->nets.cfg.presence_b}; }
 double PosePipeline::beta() const { return impl_->beta; }
 bool PosePipeline::stage1_bf16() const { return impl_->stage1_path != layers::Bf16Path::none; }
+bool PosePipeline::stage2_bf16() const { return impl_->stage2_bf16; }
 std::string PosePipeline::stage1_precision() const { return layers::bf16_path_name(impl_->stage1_path); }
 int PosePipeline::mask_max_age() const { return impl_->nets.cfg.mask_max_age; }
 

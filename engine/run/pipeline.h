@@ -53,6 +53,8 @@ struct RunOptions {
   std::optional<bool> depth_forearms;
   // Stage 1 in bf16 on AMX where the CPU has it, or fp32, instead of the model's run.bf16.
   std::optional<bool> bf16;
+  // Stage 2 in bf16 on AMX where the CPU has it, or fp32, instead of the model's run.pose_bf16.
+  std::optional<bool> pose_bf16;
   // run.mask_max_age instead of the model's (0: none).
   std::optional<int> mask_max_age;
   // Seconds between stage 1's runs while it sees nobody, instead of the model's run.idle_recheck_s.
@@ -135,6 +137,7 @@ class PosePipeline {
   double beta() const;  // the early-exit threshold in use
   bool stage1_bf16() const;  // stage 1 in bf16 (run.bf16 or --bf16, and the CPU has AMX or AVX512-BF16)
   std::string stage1_precision() const;  // "fp32", "bf16 on AMX" or "bf16 Winograd on AVX512-BF16"
+  bool stage2_bf16() const;  // stage 2 in bf16 (run.pose_bf16 or --pose-bf16, and the CPU has AMX)
   int mask_max_age() const;  // the age cap in use (0: none): run.mask_max_age_bf16 where stage 1 runs bf16 on AMX, run.mask_max_age_bf16_winograd on AVX512-BF16
   bool causal() const;
   // The time of the latest tick. A windowed (bidirectional) stage 2 hands out a window's poses

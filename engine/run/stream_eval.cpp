@@ -221,6 +221,7 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
     PosePipeline pipe(weights, W, simulator.camera().height, opt);
     sc.r.stage1_bf16 = pipe.stage1_bf16();
     sc.r.stage1_precision = pipe.stage1_precision();
+    sc.r.stage2_bf16 = pipe.stage2_bf16();
     sc.r.mask_max_age = pipe.mask_max_age();
     const int d = pipe.mask_downscale(), mw = W / d, mh = simulator.camera().height / d;
     const std::vector<std::string> conditions = conditions_in(sc.source);
@@ -270,6 +271,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
     PosePipeline pipe(weights, info.camera.width, info.camera.height, opt);
     sc.r.stage1_bf16 = pipe.stage1_bf16();
     sc.r.stage1_precision = pipe.stage1_precision();
+    sc.r.stage2_bf16 = pipe.stage2_bf16();
     sc.r.mask_max_age = pipe.mask_max_age();
     const std::int64_t end_us = info.first_event_us + std::llround(seconds * 1e6);
     const std::int64_t skip_us = info.first_event_us + std::llround(skip_s * 1e6);

@@ -72,6 +72,7 @@ struct StreamEvalResult {
   double mask_run_fraction = 0;    // of the ticks that ran stage 2
   bool stage1_bf16 = false;        // stage 1 ran in bf16 (PosePipeline::stage1_bf16)
   std::string stage1_precision = "fp32";  // PosePipeline::stage1_precision
+  bool stage2_bf16 = false;        // PosePipeline::stage2_bf16
   int mask_max_age = 0;            // the age cap it ran under (0: none)
   double mirror_run_fraction = 0;  // of the same ticks, stage 1 run again mirrored (run.mask_mirror)
   double ms_per_tick = 0;          // mean over ticks, all stages
