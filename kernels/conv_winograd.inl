@@ -30,13 +30,18 @@ inline void wino_at(const vf m[6], vf o[4]) {
   o[3] = b + (vf{} + 8.f) * d + m[5];
 }
 
-// The layouts of one chunk: V[36][ICB][kWinoChunk][16] transformed inputs of element type T
+// The layouts of one chunk: V[36][ICB][kWinoChunk][16] (+ kWinoVPad) transformed inputs of element type T
 // (stored by store_v(T* at, vf value), which may round), M[OCB][kWinoChunk][36][16] fp32
 // products. gemm(V, M, tc) fills M's first tc tiles of every product and block. M keeps a
 // tile's 36 products together: the output transform reads them as one 2.3 KB run the
 // prefetcher follows (laid out by product, its 36 strided loads a tile waited on L2).
+// One product's share of V is padded by a cache line's kBlock elements: unpadded, the input
+// transform's 36 stores of a vector lay a multiple of 3 KB apart, in 2 to 4 of L1's 64 sets
+// (ICB 1 to 3 on fp32), and each could evict the last.
+constexpr std::ptrdiff_t kWinoVPad = kBlock;
+inline std::ptrdiff_t wino_v_product(int icb) { return std::ptrdiff_t(icb) * kWinoChunk * kBlock + kWinoVPad; }
 inline std::ptrdiff_t wino_v_index(int xi, int cb, int t, int icb) {
-  return ((std::ptrdiff_t(xi) * icb + cb) * kWinoChunk + t) * kBlock;
+  return xi * wino_v_product(icb) + (std::ptrdiff_t(cb) * kWinoChunk + t) * kBlock;
 }
 constexpr std::ptrdiff_t kWinoMTile = 36 * kBlock;                  // M: to the next tile
 constexpr std::ptrdiff_t kWinoMBlock = kWinoChunk * kWinoMTile;     // M: to the next output block
@@ -139,9 +144,9 @@ void winograd_fwd(const ConvShape& s, const Input& in, const float* bias, float*
   const std::size_t cs = std::size_t(kWinoChunk) * kBlock;  // one channel block of one product
   on_team(worth_sharing(s.flops() / 4), [&] {  // a quarter of the multiplies
     // V's share is sized in floats whatever T is (bf16 uses half of it): one scratch shape.
-    float* scratch = thread_scratch(std::size_t(36) * (ICB + OCB) * cs);
+    float* scratch = thread_scratch(std::size_t(36) * (wino_v_product(ICB) + OCB * cs));
     T* V = reinterpret_cast<T*>(scratch);
-    float* M = scratch + std::size_t(36) * ICB * cs;
+    float* M = scratch + std::size_t(36) * wino_v_product(ICB);
 #pragma omp for collapse(2) schedule(static)
     for (int n = 0; n < s.n; ++n)
       for (int ch = 0; ch < chunks; ++ch) {

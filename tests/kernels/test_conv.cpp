@@ -2,6 +2,7 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "conv_reference.h"
@@ -350,6 +351,61 @@ TEST_CASE("a fused ReLU stores exactly max(0, y) of the same forward, direct and
         }
         CHECK(differ == 0);
         CHECK(negative > 0);  // the ReLU had something to clip
+      }
+    }
+  }
+}
+
+// The tile unrolls a source block of exactly 8 channels (8-channel maps, 24-channel ones' last
+// block) as it does a full one; any other count takes the counted loop. The same convolution
+// with a ninth channel that is zero in x and w takes that loop and must give the same bits:
+// each lane into the same partial sum, in the same order (x * 0 adds +0).
+TEST_CASE("an 8-channel source block gives the bits of the counted loop (a ninth, zero channel), direct and Winograd", "[kernels][conv][winograd]") {
+  for (const Case& c : {Case{1, 8, 17, 22, 8, 3, 1, 1}, Case{2, 8, 9, 13, 16, 3, 1, 1}, Case{1, 8, 9, 11, 12, 3, 2, 1},
+                        Case{1, 24, 13, 19, 24, 3, 1, 1}, Case{1, 40, 7, 26, 20, 3, 1, 1}, Case{1, 8, 7, 9, 40, 1, 1, 0}}) {
+    ConvShape s = shape_of(c), s9 = s;
+    s9.ic = s.ic + 1;
+    const int K = s.kh * s.kw;
+    const auto x = random_floats(std::size_t(s.n) * s.ic * s.ih * s.iw, 71);
+    const auto w = random_floats(std::size_t(s.oc) * s.ic * K, 72);
+    const auto b = random_floats(s.oc, 73);
+    std::vector<float> x9(std::size_t(s.n) * s9.ic * s.ih * s.iw, 0.f), w9(std::size_t(s.oc) * s9.ic * K, 0.f);
+    const std::size_t plane = std::size_t(s.ih) * s.iw;
+    for (int n = 0; n < s.n; ++n)
+      std::copy_n(x.begin() + std::ptrdiff_t(n) * s.ic * plane, s.ic * plane, x9.begin() + std::ptrdiff_t(n) * s9.ic * plane);
+    for (int o = 0; o < s.oc; ++o)
+      std::copy_n(w.begin() + std::ptrdiff_t(o) * s.ic * K, s.ic * K, w9.begin() + std::ptrdiff_t(o) * s9.ic * K);
+    std::vector<float> bias(std::size_t(s.ocb()) * kBlock, 0.f);
+    std::copy(b.begin(), b.end(), bias.begin());
+    const auto xb = to_blocked(x, s.n, s.ic, s.ih, s.iw), xb9 = to_blocked(x9, s.n, s9.ic, s.ih, s.iw);
+    const bool wino = winograd_applicable(s);
+    std::vector<float> wf(conv_weight_floats(s)), wf9(conv_weight_floats(s9)), u, u9;
+    pack_conv_weights(s, w.data(), ConvPack::fwd, wf.data());
+    pack_conv_weights(s9, w9.data(), ConvPack::fwd, wf9.data());
+    if (wino) {
+      u.resize(winograd_weight_floats(s));
+      u9.resize(winograd_weight_floats(s9));
+      pack_winograd_weights(s, w.data(), u.data());
+      pack_winograd_weights(s9, w9.data(), u9.data());
+    }
+    const std::size_t ny = std::size_t(s.n) * s.ocb() * s.oh() * s.ow() * kBlock;
+    for (Isa isa : yelan::test::supported_isas()) {
+      if (isa == Isa::scalar) continue;  // plain loops: no tiles
+      const ConvKernels& k = conv_kernels(isa);
+      for (const bool relu : {false, true}) {
+        s.relu = s9.relu = relu;
+        INFO("isa " << isa_name(isa) << " n" << c.n << " ic" << c.ic << " " << c.ih << "x" << c.iw << " oc" << c.oc
+                    << " k" << c.k << " s" << c.stride << (relu ? " relu" : ""));
+        std::vector<float> y(ny, -5.f), y9(ny, 5.f);
+        k.fwd(s, xb.data(), wf.data(), bias.data(), y.data());
+        k.fwd(s9, xb9.data(), wf9.data(), bias.data(), y9.data());
+        CHECK(y == y9);
+        if (!wino) continue;
+        std::fill(y.begin(), y.end(), -5.f);
+        std::fill(y9.begin(), y9.end(), 5.f);
+        k.fwd_winograd(s, xb.data(), u.data(), bias.data(), y.data());
+        k.fwd_winograd(s9, xb9.data(), u9.data(), bias.data(), y9.data());
+        CHECK(y == y9);
       }
     }
   }
