@@ -172,6 +172,67 @@ constexpr auto kHalfLastTiles = tile_table<true>(std::make_integer_sequence<int,
 // kHalfTiles[r - 1] is tile<r, 1, true>, up to HALF_R pixels.
 constexpr auto kHalfTiles = tiles_for<1, true>(std::make_integer_sequence<int, HALF_R>{});
 
+// A half block alone on AVX2 (8 output channels, one ymm a pixel): the tile above broadcasts
+// one source value per FMA, and AVX2 cores run broadcasts and FMAs at one rate, so it held half
+// the FMA peak. Where a kernel row's three column taps read three neighbouring source pixels
+// (stride 1, 3-wide kernels: stage 2's 8-channel layers), one broadcast of a source pixel
+// feeds the three outputs that read it, each with its own tap's weights: R outputs take R + 2
+// broadcasts and 3R FMAs per source lane and kernel row. Sums run per kernel row and lane
+// over the three taps, not tap by tap as the tile's: the same terms in another order.
+constexpr int ROW3_R = VL == 8 ? 10 : 0;  // 10 accumulators + 3 weights + 1 broadcast of 16 ymm
+constexpr int ROW3_TILE = ROW3_R > 0 ? ROW3_R : 1;  // what the other ISAs compile and never call
+
+struct Row3Args {
+  TileArgs a;                      // src: output column 0's tap-0 source pixel; taps unused
+  int nrow = 0;
+  std::ptrdiff_t row_src[kMaxKernel], row_w[kMaxKernel];
+  std::ptrdiff_t w_k = 0;          // weights: to the next column tap
+};
+
+template <int R>
+void half_row3(const Row3Args& g) {
+  const TileArgs& a = g.a;
+  vhalf acc[R];
+#pragma GCC unroll 16
+  for (int r = 0; r < R; ++r) acc[r] = a.bias ? *reinterpret_cast<const vhalfu*>(a.bias) : vhalf{};
+  // Source pixel p of lane c into the outputs that read it: output p - k at column tap k.
+  const auto lane = [&](const float* s, const float* w, int c) __attribute__((always_inline)) {
+    const vhalf w0 = *reinterpret_cast<const vhalfu*>(w + c * kBlock);
+    const vhalf w1 = *reinterpret_cast<const vhalfu*>(w + g.w_k + c * kBlock);
+    const vhalf w2 = *reinterpret_cast<const vhalfu*>(w + 2 * g.w_k + c * kBlock);
+#pragma GCC unroll 16
+    for (int p = 0; p < R + 2; ++p) {
+      const float xv = s[p * a.src_r + c];
+      if (p < R) acc[p] += xv * w0;
+      if (p >= 1 && p - 1 < R) acc[p - 1] += xv * w1;
+      if (p >= 2) acc[p - 2] += xv * w2;
+    }
+  };
+  for (int cb = 0; cb < a.ncb; ++cb) {
+    const int lanes = cb == a.ncb - 1 ? a.last_lanes : kBlock;
+    for (int i = 0; i < g.nrow; ++i) {
+      const float* s = a.src + cb * a.src_cb + g.row_src[i];
+      const float* w = a.w + cb * a.w_cb + g.row_w[i];
+      if (lanes == kBlock) {
+#pragma GCC unroll 16
+        for (int c = 0; c < kBlock; ++c) lane(s, w, c);
+      } else if (lanes == kBlock / 2) {
+#pragma GCC unroll 8
+        for (int c = 0; c < kBlock / 2; ++c) lane(s, w, c);
+      } else {
+        for (int c = 0; c < lanes; ++c) lane(s, w, c);
+      }
+    }
+  }
+#pragma GCC unroll 16
+  for (int r = 0; r < R; ++r) {
+    if (a.relu) acc[r] = acc[r] > vhalf{} ? acc[r] : vhalf{};
+    float* d = a.dst + r * a.dst_r;
+    *reinterpret_cast<vhalfu*>(d) = acc[r];
+    *reinterpret_cast<vhalfu*>(d + kBlock / 2) = vhalf{};
+  }
+}
+
 // The tiles for a group of nb output blocks, the last of them half when half_last, and
 // their widest tile in pixels.
 inline const TileFn* tiles_for_group(int nb, bool half_last, int* tile_r) {
@@ -219,7 +280,26 @@ inline void run_row(const RowJob& job, TileArgs a, int nb, bool half_last = fals
   a.src_r = std::ptrdiff_t(job.mult) * kBlock;
   a.taps = taps;
   a.ntaps = nt;
-  for (int t = t_lo; t < t_hi; t += tile_r) {
+  int t_tiles = t_lo;  // the interior columns from here on go in tiles
+  if constexpr (ROW3_R > 0) {
+    if (nb == 1 && half_last && job.mult == 1 && job.ncol == 3 && job.col_base[1] == job.col_base[0] + 1 &&
+        job.col_base[2] == job.col_base[0] + 2 && job.col_w[2] - job.col_w[1] == job.col_w[1] - job.col_w[0]) {
+      Row3Args g;
+      g.a = a;
+      g.nrow = job.nrow;
+      for (int i = 0; i < job.nrow; ++i) {
+        g.row_src[i] = job.row_src[i] + std::ptrdiff_t(job.col_base[0]) * kBlock;
+        g.row_w[i] = job.row_w[i] + job.col_w[0];
+      }
+      g.w_k = job.col_w[1] - job.col_w[0];
+      for (; t_tiles + ROW3_R <= t_hi; t_tiles += ROW3_R) {
+        g.a.src = src0 + t_tiles * a.src_r;
+        g.a.dst = dst0 + t_tiles * a.dst_r;
+        half_row3<ROW3_TILE>(g);
+      }
+    }
+  }
+  for (int t = t_tiles; t < t_hi; t += tile_r) {
     const int r = std::min(tile_r, t_hi - t);
     a.src = src0 + t * a.src_r;
     a.dst = dst0 + t * a.dst_r;

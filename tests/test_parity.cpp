@@ -415,7 +415,13 @@ TEST_CASE("20 training steps from the same weights and batches give PyTorch's lo
                 step, lm, m32.data[step], lp, p32.data[step], p64.data[step], ep, ep_torch);
     INFO("step " << step);
     CHECK(em <= 1e-3);
-    if (step < 3) CHECK(ep <= 1e-5);
+    // Before Adam has stepped twice the losses agree to float32's rounding. From then on its
+    // normalisation (m / sqrt(v)) turns gradients that are rounding noise into whole steps, and
+    // the drift depends on the CPU's summation order: on an AVX2-only AMD EPYC (Zen 3) step 2
+    // drifted 2.5e-5 (AVX2) and 1.4e-5 (the scalar kernels) from float64, PyTorch float32 2.8e-5
+    // one step later; 1e-5 had held there on the AVX-512 CPUs. After step 2: the bound below.
+    if (step < 2) CHECK(ep <= 1e-5);
+    if (step == 2) CHECK(ep <= 1e-4);
     mask_worst = std::max(mask_worst, em);
     pose_ours = std::max(pose_ours, ep);
     pose_torch = std::max(pose_torch, ep_torch);
