@@ -1253,6 +1253,22 @@ TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for t
     CHECK(r.mask_iou_px == Approx(r.mask_iou).margin(0.1));
     for (const auto& [c, iou] : r.mask_iou_px_by_condition) CHECK(iou == Approx(r.mask_iou_px).margin(1e-12));
     if (beta < 1) CHECK(r.mask_run_fraction < 1);
+    // By the mask's age: every scored tick once; stage 1 on every tick reads only fresh masks,
+    // early exit reused ones too; the pooled IoU lies between the ages' (a weighted mean of them).
+    std::uint64_t by_age = 0;
+    double lo = 1, hi = 0;
+    for (const auto& [age, a] : r.mask_iou_by_age) by_age += a.ticks, lo = std::min(lo, a.iou), hi = std::max(hi, a.iou);
+    CHECK(by_age == r.mask_ticks);
+    CHECK(r.mask_iou >= lo - 1e-12);
+    CHECK(r.mask_iou <= hi + 1e-12);
+    if (beta > 1) {
+      REQUIRE(r.mask_iou_by_age.size() == 1);
+      CHECK(r.mask_iou_by_age.begin()->first == 0);
+      CHECK(r.mask_iou_by_age.begin()->second.iou == Approx(r.mask_iou).margin(1e-12));
+    } else {
+      CHECK(r.mask_iou_by_age.size() >= 2);
+      CHECK(r.mask_iou_by_age.rbegin()->first >= 1);
+    }
   }
   // The CLI's JSON carries it; simulated scenes have no true masks on disk to read: null.
   REQUIRE(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--run", "--seconds", "0.6", "--skip", "0.2", "--threads", "1",
@@ -1264,6 +1280,15 @@ TEST_CASE("run: eval --run scores the masks stage 2 read as deployed, tick for t
   CHECK(j.at("mask_iou_by_condition").size() >= 2);
   CHECK(j.at("mask_iou_sensor_px").get<double>() > 0.2);
   CHECK(j.at("mask_iou_sensor_px_by_condition").size() == j.at("mask_iou_by_condition").size());
+  int age_ticks = 0;
+  for (const auto& [age, a] : j.at("mask_iou_by_age").items()) {
+    CHECK(std::stoi(age) >= 0);
+    CHECK(a.at("iou").get<double>() >= 0);
+    CHECK(a.at("iou").get<double>() <= 1);
+    age_ticks += a.at("ticks").get<int>();
+  }
+  CHECK(age_ticks == j.at("mask_ticks").get<int>());
+  CHECK(j.at("mask_iou_by_age").size() >= 2);  // the shipped early exit reuses masks
   // Without early exit the CLI runs stage 1 on every tick: the sweep's IoU at beta 1.01.
   REQUIRE(run_cli({"eval", "--weights", w, "--data", d / "ds/val", "--run", "--seconds", "0.6", "--skip", "0.2", "--threads", "1",
                    "--no-early-exit", "--json", d / "every.json"})

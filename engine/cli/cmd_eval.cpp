@@ -42,6 +42,9 @@ std::string mask_iou_json(const run::StreamEvalResult& r) {
                               {"mask_iou_by_condition", r.mask_iou_by_condition},
                               {"mask_iou_sensor_px", r.mask_iou_px >= 0 ? nlohmann::ordered_json(r.mask_iou_px) : nlohmann::ordered_json(nullptr)},
                               {"mask_iou_sensor_px_by_condition", r.mask_iou_px_by_condition}};
+  nlohmann::ordered_json by_age = nlohmann::ordered_json::object();
+  for (const auto& [age, a] : r.mask_iou_by_age) by_age[std::to_string(age)] = {{"iou", a.iou}, {"ticks", a.ticks}};
+  j["mask_iou_by_age"] = by_age;
   const std::string s = j.dump();
   return s.substr(1, s.size() - 2);  // the members, spliced into the object below
 }
@@ -117,6 +120,8 @@ int eval_run(const train::EvalSpec& spec, const Args& a, std::ostream& out, std:
     for (const auto& [c, iou] : r.mask_iou_by_condition) t << " " << c << " " << iou;
     t << "\nthe same at the sensor's pixels (each with its cell's verdict): " << r.mask_iou_px << "; by condition:";
     for (const auto& [c, iou] : r.mask_iou_px_by_condition) t << " " << c << " " << iou;
+    t << "\nthe same by the age of the mask in use (0: this tick's; k: a future mask reused k ticks after stage 1 ran):";
+    for (const auto& [age, a] : r.mask_iou_by_age) t << " " << age << ": " << a.iou << " (" << a.ticks << " ticks)";
     t << "\n";
   }
   if (!r.presence_by_condition.empty()) {

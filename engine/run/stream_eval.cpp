@@ -86,6 +86,7 @@ struct StreamScorer {
   RunStats crops;  // the crop tallies of every run, for run::crop_share
   train::MaskOverlap overlap;  // the masks in use against the true ones
   std::map<std::string, train::MaskOverlap> overlap_by_condition;
+  std::map<int, train::MaskOverlap> overlap_by_age;
   bool keep = false;
   std::string source;  // the name the kept poses carry
 
@@ -106,12 +107,14 @@ struct StreamScorer {
   // The mask stage 1 left for stage 2 at a tick (net size mh x mw, cells of d pixels) against
   // the true mask then (sensor_w wide); nothing when the pipeline has no mask net.
   void add_mask(const std::uint8_t* truth, int sensor_w, const std::vector<float>& in_use, int mh, int mw, int d,
-                const std::vector<std::string>& conditions) {
+                const std::vector<std::string>& conditions, int age) {
     if (in_use.size() != std::size_t(mw) * std::size_t(mh)) return;
     train::MaskOverlap o;
     train::add_mask_overlap(o, truth, sensor_w, in_use.data(), mh, mw, d);
     overlap += o;
     for (const std::string& c : conditions) overlap_by_condition[c] += o;
+    overlap_by_age[age] += o;
+    ++r.mask_iou_by_age[age].ticks;
     ++r.mask_ticks;
   }
 
@@ -192,6 +195,7 @@ struct StreamScorer {
       r.mask_iou_px = overlap.iou_px();
       r.mask_iou_by_condition = train::measured_iou(overlap_by_condition);
       r.mask_iou_px_by_condition = train::measured_iou(overlap_by_condition, true);
+      for (const auto& [age, o] : overlap_by_age) r.mask_iou_by_age[age].iou = o.iou();
     }
     if (!depth_ratio.empty()) {
       r.depth_ratio_median = percentile(depth_ratio, 0.5);
@@ -236,7 +240,7 @@ StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<S
       if (scene.mask_bits.empty() || !pipe.masks_are_for(p)) return;
       const auto at = mask_index_near(scene.mask_t, 0, scene.mask_t.size(), p.t_us);
       if (!at || !scene.true_mask(*at, truth)) return;
-      sc.add_mask(truth.data(), W, pipe.last_stage1_mask(), mh, mw, d, conditions);
+      sc.add_mask(truth.data(), W, pipe.last_stage1_mask(), mh, mw, d, conditions, p.mask_age);
     };
     const auto t0 = Clock::now();
     pipe.push(scene.events, keep);
@@ -285,7 +289,7 @@ StreamEvalResult evaluate_recordings(const std::string& weights, const std::vect
       poses.push_back(p);
       if (!truth || !pipe.masks_are_for(p)) return;
       if (const auto at = truth->index_at(p.t_us))
-        sc.add_mask(truth->mask(*at), info.camera.width, pipe.last_stage1_mask(), mh, mw, d, conditions);
+        sc.add_mask(truth->mask(*at), info.camera.width, pipe.last_stage1_mask(), mh, mw, d, conditions, p.mask_age);
     };
     sc.r.wall_s += run_file(pipe, recordings[i], end_us, keep);
     sim::Joints13 joints;

@@ -99,6 +99,13 @@ struct StreamEvalResult {
   // The same at the sensor's pixels, each with its cell's verdict (train::MaskOverlap::iou_px).
   double mask_iou_px = -1;
   std::map<std::string, double> mask_iou_px_by_condition;
+  // The same by the age of the mask in use (Pose::mask_age: 0 this tick's, k a future mask
+  // reused k ticks after stage 1 ran): where early exit loses the masks. Pooled per age.
+  struct AgeIou {
+    double iou = 0;
+    std::uint64_t ticks = 0;
+  };
+  std::map<int, AgeIou> mask_iou_by_age;
 };
 
 StreamEvalResult evaluate_stream(const std::string& weights, const std::vector<SimulatedScene>& scenes,

@@ -357,9 +357,10 @@ TEST_CASE("a fused ReLU stores exactly max(0, y) of the same forward, direct and
 }
 
 // The tile unrolls a source block of exactly 8 channels (8-channel maps, 24-channel ones' last
-// block) as it does a full one; any other count takes the counted loop. The same convolution
-// with a ninth channel that is zero in x and w takes that loop and must give the same bits:
-// each lane into the same partial sum, in the same order (x * 0 adds +0).
+// block) as it does a full one, and so does AVX2's half_row3 (the cases with 8 output
+// channels, 3x3 stride 1, go through it); any other count takes the counted loop. The same
+// convolution with a ninth channel that is zero in x and w takes that loop and must give the
+// same bits: each lane into the same partial sum, in the same order (x * 0 adds +0).
 TEST_CASE("an 8-channel source block gives the bits of the counted loop (a ninth, zero channel), direct and Winograd", "[kernels][conv][winograd]") {
   for (const Case& c : {Case{1, 8, 17, 22, 8, 3, 1, 1}, Case{2, 8, 9, 13, 16, 3, 1, 1}, Case{1, 8, 9, 11, 12, 3, 2, 1},
                         Case{1, 24, 13, 19, 24, 3, 1, 1}, Case{1, 40, 7, 26, 20, 3, 1, 1}, Case{1, 8, 7, 9, 40, 1, 1, 0}}) {
