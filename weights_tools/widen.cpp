@@ -24,8 +24,10 @@ struct Layout {
 };
 using LayoutOf = std::function<Layout(const std::string& name)>;
 
-// For each index along the wider axis, the old index it holds, or -1 for a new channel.
-std::vector<std::int64_t> axis_map(Parts old_parts, Parts new_parts, std::int64_t old_n, std::int64_t new_n, bool* fits) {
+// For each index along the new axis, the old index it holds, or -1 for a new channel. Each
+// part keeps its first channels: all of them when widening, as many as fit when narrowing.
+std::vector<std::int64_t> axis_map(Parts old_parts, Parts new_parts, std::int64_t old_n, std::int64_t new_n, bool narrow,
+                                   bool* fits) {
   if (old_parts.empty()) old_parts = {old_n}, new_parts = {new_n};
   std::int64_t so = 0, sn = 0;
   for (std::size_t i = 0; i < old_parts.size(); ++i) so += old_parts[i], sn += new_parts[i];
@@ -34,7 +36,7 @@ std::vector<std::int64_t> axis_map(Parts old_parts, Parts new_parts, std::int64_
   if (!*fits) return m;
   std::int64_t o0 = 0, n0 = 0;
   for (std::size_t i = 0; i < old_parts.size(); ++i) {
-    if (new_parts[i] < old_parts[i]) *fits = false;
+    if (narrow ? new_parts[i] > old_parts[i] : new_parts[i] < old_parts[i]) *fits = false;
     for (std::int64_t j = 0; j < std::min(old_parts[i], new_parts[i]); ++j) m[std::size_t(n0 + j)] = o0 + j;
     o0 += old_parts[i];
     n0 += new_parts[i];
@@ -42,10 +44,11 @@ std::vector<std::int64_t> axis_map(Parts old_parts, Parts new_parts, std::int64_
   return m;
 }
 
-// `out` holds the wider net's freshly initialised tensors; every old weight is put in its
-// place and every weight reading a new channel into an old one is zeroed.
+// `out` holds the new net's freshly initialised tensors; every old weight it has room for is put
+// in its place and every weight reading a new channel into an old one is zeroed (narrowing:
+// every new channel is an old one, and the old ones past each part's new size are dropped).
 void carry_over(const std::map<std::string, Tensor>& old, std::map<std::string, Tensor>& out, const LayoutOf& layout_of,
-                const std::string& group, const std::string& source) {
+                const std::string& group, const std::string& source, bool narrow = false) {
   for (auto& [name, t] : out) {
     const Tensor& o = old.at(name);
     const std::size_t dims = t.shape.size();
@@ -57,15 +60,16 @@ void carry_over(const std::map<std::string, Tensor>& old, std::map<std::string, 
     const std::size_t out_axis = l.transposed ? 1 : 0, in_axis = dims >= 2 ? (l.transposed ? 0 : 1) : dims;
     std::vector<std::vector<std::int64_t>> maps(dims);
     for (std::size_t a = 0; a < dims; ++a) {
-      bool fits = o.shape.size() == dims && t.shape[a] >= o.shape[a] && (a < 2 || t.shape[a] == o.shape[a]);
+      bool fits = o.shape.size() == dims && (narrow ? t.shape[a] <= o.shape[a] : t.shape[a] >= o.shape[a]) &&
+                  (a < 2 || t.shape[a] == o.shape[a]);
       if (fits) {
         const bool is_out = a == out_axis, is_in = a == in_axis;
         maps[a] = axis_map(is_out ? l.out_old : is_in ? l.in_old : Parts{}, is_out ? l.out_new : is_in ? l.in_new : Parts{},
-                           o.shape[a], t.shape[a], &fits);
+                           o.shape[a], t.shape[a], narrow, &fits);
       }
       if (!fits)
-        throw WeightsError(source + ": " + group + "/" + name + " " + shape_text(o.shape) + " does not widen to " +
-                           shape_text(t.shape));
+        throw WeightsError(source + ": " + group + "/" + name + " " + shape_text(o.shape) + " does not " +
+                           (narrow ? "narrow" : "widen") + " to " + shape_text(t.shape));
     }
     std::vector<std::int64_t> idx(dims, 0);
     for (std::size_t e = 0; e < t.data.size(); ++e) {
@@ -90,7 +94,7 @@ void carry_over(const std::map<std::string, Tensor>& old, std::map<std::string, 
 
 // `to` may change nothing of the input section, and of `section` only the keys in `free`.
 void check_sections(const ModelConfig& from, const ModelConfig& to, const char* section, std::initializer_list<const char*> free,
-                    const std::string& what, const std::string& source) {
+                    const std::string& what, const std::string& source, const char* verb = "widening") {
   const auto a = parse_json(from.json), b = parse_json(to.json);
   const auto cut = [&](const auto& d, const char* key) {
     auto sec = d.contains(key) ? d.at(key) : std::decay_t<decltype(d)>();
@@ -100,7 +104,7 @@ void check_sections(const ModelConfig& from, const ModelConfig& to, const char* 
   };
   for (const char* key : {"input", section})
     if (cut(a, key) != cut(b, key))
-      throw WeightsError(source + ": widening changes " + what + " alone; config '" + to.name + "' also changes its '" + key +
+      throw WeightsError(source + ": " + verb + " changes " + what + " alone; config '" + to.name + "' also changes its '" + key +
                          "' section");
 }
 
@@ -124,6 +128,24 @@ std::map<std::string, Tensor> fresh_group(const ModelConfig& to, std::uint64_t s
   return group_of(np);
 }
 
+// The U-Net's axes: the up-sampling's transposed weights, and each up block's first
+// convolution reading [skip | up-sampled], each part the level's width.
+LayoutOf mask_layout(const std::map<std::string, Tensor>& old_mask, const std::map<std::string, Tensor>& out) {
+  return [&](const std::string& name) {
+    static const std::regex cat_input(R"(up\d+\.conv\.double_conv\.0\.weight)");
+    static const std::regex transposed(R"(up\d+\.up\.weight)");
+    Layout l;
+    l.transposed = std::regex_match(name, transposed);
+    if (std::regex_match(name, cat_input)) {
+      // An odd width is not two halves: the parts then miss the axis, which carry_over refuses.
+      const std::int64_t o = old_mask.at(name).shape.at(1), n = out.at(name).shape.at(1);
+      l.in_old = {o / 2, o / 2};
+      l.in_new = {n / 2, n / 2};
+    }
+    return l;
+  };
+}
+
 }  // namespace
 
 std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
@@ -134,20 +156,19 @@ std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tenso
                        " < " + std::to_string(from.mask_width) + "); widening only adds channels");
   check_fits<MaskNet>(old_mask, "mask", from, source);
   std::map<std::string, Tensor> out = fresh_group<MaskNet>(to, seed);
-  static const std::regex cat_input(R"(up\d+\.conv\.double_conv\.0\.weight)");
-  static const std::regex transposed(R"(up\d+\.up\.weight)");
-  const LayoutOf layout = [&](const std::string& name) {
-    Layout l;
-    l.transposed = std::regex_match(name, transposed);
-    if (std::regex_match(name, cat_input)) {  // [skip | up-sampled], each the level's width
-      // An odd width is not two halves: the parts then miss the axis, which carry_over refuses.
-      const std::int64_t o = old_mask.at(name).shape.at(1), n = out.at(name).shape.at(1);
-      l.in_old = {o / 2, o / 2};
-      l.in_new = {n / 2, n / 2};
-    }
-    return l;
-  };
-  carry_over(old_mask, out, layout, "mask", source);
+  carry_over(old_mask, out, mask_layout(old_mask, out), "mask", source);
+  return out;
+}
+
+std::map<std::string, Tensor> narrow_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
+                                                const ModelConfig& to, const std::string& source) {
+  check_sections(from, to, "mask", {"width_mult", "role"}, "mask.width_mult", source, "narrowing");
+  if (to.mask_width >= from.mask_width)
+    throw WeightsError(source + ": config '" + to.name + "' has no narrower mask net (width_mult " + std::to_string(to.mask_width) +
+                       " >= " + std::to_string(from.mask_width) + "); narrowing only drops channels");
+  check_fits<MaskNet>(old_mask, "mask", from, source);
+  std::map<std::string, Tensor> out = fresh_group<MaskNet>(to, 0);  // the shapes: every value is an old one
+  carry_over(old_mask, out, mask_layout(old_mask, out), "mask", source, true);
   return out;
 }
 

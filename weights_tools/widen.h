@@ -3,7 +3,7 @@
 // change the order of the sums): every old weight kept in place, the new channels' own
 // weights freshly initialised, and every weight that reads a new channel into an old one
 // zero. Training then starts from the old net's accuracy instead of from scratch (Net2Net's
-// "wider" idea with zeroed fan-out).
+// "wider" idea with zeroed fan-out). And the way back for stage 1: its first channels alone.
 #pragma once
 #include <cstdint>
 #include <map>
@@ -20,6 +20,15 @@ namespace yelan::weights {
 // `source` when the group does not fit `from` or `to` cannot hold it.
 std::map<std::string, Tensor> widen_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
                                                const ModelConfig& to, std::uint64_t seed, const std::string& source);
+
+// The other way for stage 1: a trained mask group cut to `to`'s narrower U-Net, each layer
+// keeping its first output channels and each input axis (each part of a concatenation) the
+// channels those are: no longer the same outputs (what the dropped channels added is gone),
+// but a start for a training at the narrower width that keeps the old net's first features
+// rather than drawing them (a narrower stage 1 runs cheaper: 13 against 28 ms a run at width
+// 0.25 against 0.375 on one AVX2 core). `to` may change mask.width_mult alone, narrower.
+std::map<std::string, Tensor> narrow_mask_group(const std::map<std::string, Tensor>& old_mask, const ModelConfig& from,
+                                                const ModelConfig& to, const std::string& source);
 
 // The same for a pose group: `to` may change pose.width_mult and pose.hidden (neither
 // narrower) and pose.crop_margin, nothing else of the pose or input sections. The ConvLSTM's

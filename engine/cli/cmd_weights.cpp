@@ -295,6 +295,33 @@ int widen(const Args& a, std::ostream& out) {
   return kOk;
 }
 
+// A trained stage 1 cut to a narrower mask net (weights_tools/widen.h: the first channels of
+// every layer kept), with the pose group as it was: the start of a training at that width.
+int narrow(const Args& a, std::ostream& out) {
+  a.expect_positionals(0, 0);
+  const auto in = a.value("--weights"), name = a.value("--config"), o = a.value("-o");
+  if (!in || !name || !o) throw UsageError("weights narrow needs --weights OLD.h5 --config NAME|FILE -o OUT.h5");
+  check_output("-o", *o, {*in, *name});
+  const ModelConfig to = load_model_config(*name);
+  weights::Weights w = weights::load_weights(*in);
+  const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
+  if (to.pose_width != from.pose_width || to.hidden != from.hidden || to.outside_input != from.outside_input)
+    throw UsageError("weights narrow: config " + to.name + " changes the pose net; narrowing cuts the mask net alone");
+  w.groups["mask"] = weights::narrow_mask_group(w.groups["mask"], from, to, *in);
+  w.config_json = to.json;
+  try {
+    const weights::LoadedNetworks fits(w, *in);
+  } catch (const std::exception& e) {
+    throw UsageError("weights narrow: " + *in + "'s pose group does not fit --config " + *name + ": " + e.what());
+  }
+  weights::save_weights(*o, w);
+  out << "wrote " << *o << ": mask net cut from width_mult " << from.mask_width << " to " << to.mask_width << " ("
+      << from.unet_width(0) << " -> " << to.unet_width(0) << " channels at the top level, the first of each layer kept; "
+      << "not the same outputs: train it), pose from " << *in << ", config " << to.name
+      << " (its run settings, not " << *in << "'s: calibrate after training)\n";
+  return kOk;
+}
+
 // What smoothing the presence feature over time would buy on the same ticks: each time
 // constant refitted, its hit and false-alarm rates, and how long the verdict takes to flip
 // when a dancer of the median dancer tick's share appears in an empty picture or leaves it.
@@ -470,6 +497,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
                        out, err);
     if (sub == "combine") return combine(Args("weights combine", rest, {"--mask", "--pose", "-o", "--config"}, {}), out);
     if (sub == "widen") return widen(Args("weights widen", rest, {"--weights", "--config", "-o", "--seed"}, {}), out);
+    if (sub == "narrow") return narrow(Args("weights narrow", rest, {"--weights", "--config", "-o"}, {}), out);
   } catch (const weights::WeightsError& e) {
     std::istringstream lines(e.what());
     for (std::string line; std::getline(lines, line);) err << "yelan: error: " << printable(line) << "\n";
@@ -478,7 +506,7 @@ int cmd_weights(const std::vector<std::string>& argv, std::ostream& out, std::os
     err << "yelan: error: config JSON: " << printable(e.what()) << "\n";
     return kUsageError;
   }
-  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine, calibrate, widen)");
+  throw UsageError("unknown weights subcommand '" + sub + "' (inspect, diff, verify, init, combine, calibrate, widen, narrow)");
 }
 
 }  // namespace yelan::cli

@@ -1,9 +1,12 @@
 // weights::widen_mask_group, widen_pose_group and `yelan weights widen`: a wider stage 1 or
 // stage 2 that starts where the narrow one was (same outputs in both BN modes) and can still
-// learn its new channels.
+// learn its new channels; narrow_mask_group and `yelan weights narrow`, the way back for stage 1.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
@@ -375,4 +378,96 @@ TEST_CASE("widening to pose.outside_input: the events outside the mask read by z
   CHECK(outside_weights == 0);
   // And back is refused: widening only adds.
   refuses([&] { weights::widen_pose_group(weights::group_of(b.params), outside, gated, 1, "old.h5"); }, "drops pose.outside_input");
+}
+
+TEST_CASE("narrowing a widened stage 1 gives back the original, tensor for tensor", "[weights][narrow]") {
+  const ModelConfig narrow = load_model_config("tiny"), wide = tiny_mask(0.1875);  // 8 <-> 12 channels at the top
+  Net a(narrow);
+  a.net.init(5);
+  weights::randomise_batchnorm(a.params, 6);
+  const auto old_group = weights::group_of(a.params);
+  const auto back = weights::narrow_mask_group(weights::widen_mask_group(old_group, narrow, wide, 7, "old.h5"), wide, narrow, "wide.h5");
+  REQUIRE(back.size() == old_group.size());
+  for (const auto& [name, t] : old_group) {
+    INFO(name);
+    CHECK(back.at(name).shape == t.shape);
+    CHECK(back.at(name).data == t.data);
+  }
+}
+
+TEST_CASE("narrowing keeps each layer's first channels and each concatenated part's, and runs", "[weights][narrow]") {
+  const ModelConfig wide = tiny_mask(0.1875), narrow = load_model_config("tiny");  // 12 -> 8 channels at the top
+  Net a(wide);
+  a.net.init(3);
+  weights::randomise_batchnorm(a.params, 4);
+  const auto group = weights::narrow_mask_group(weights::group_of(a.params), wide, narrow, "wide.h5");
+  const auto& inc0 = a.param("inc.double_conv.0.weight");  // [12, 6, 3, 3] -> [8, 6, 3, 3]
+  const auto& cut0 = group.at("inc.double_conv.0.weight");
+  REQUIRE(cut0.shape == weights::Shape{8, 6, 3, 3});
+  CHECK(std::equal(cut0.data.begin(), cut0.data.end(), inc0.value.data()));
+  const auto& var = group.at("inc.double_conv.1.running_var");
+  REQUIRE(var.shape == weights::Shape{8});
+  for (int c = 0; c < 8; ++c) CHECK(var.data[std::size_t(c)] == a.param("inc.double_conv.1.running_var").value[std::size_t(c)]);
+  // [skip 12 | up 12] -> [skip 8 | up 8]: output 3 reads skip channel 5 and up-sampled channel 5 as before.
+  const auto& cat_wide = a.param("up4.conv.double_conv.0.weight");  // [12, 24, 3, 3]
+  const auto& cat = group.at("up4.conv.double_conv.0.weight");
+  REQUIRE(cat.shape == weights::Shape{8, 16, 3, 3});
+  CHECK(cat.data[std::size_t((3 * 16 + 5) * 9 + 2)] == cat_wide.value[std::size_t((3 * 24 + 5) * 9 + 2)]);
+  CHECK(cat.data[std::size_t((3 * 16 + 8 + 5) * 9 + 2)] == cat_wide.value[std::size_t((3 * 24 + 12 + 5) * 9 + 2)]);
+  const auto& up = group.at("up1.up.weight");  // transposed: [in, out, 2, 2], both axes cut
+  const auto& up_wide = a.param("up1.up.weight");
+  REQUIRE(up_wide.shape.size() == 4);
+  const std::int64_t wo = up_wide.shape[1], no = up.shape[1];
+  CHECK(up.shape[0] < up_wide.shape[0]);
+  CHECK(up.data[std::size_t(((2 * no + 1) * 2 + 1) * 2 + 0)] == up_wide.value[std::size_t(((2 * wo + 1) * 2 + 1) * 2 + 0)]);
+  // The score head's last layer keeps its n_masks outputs and reads the kept features.
+  CHECK(group.at("fc.weight").shape.at(0) == 4);
+
+  // The cut net loads and computes masks and scores (not the wide net's).
+  Net b(narrow);
+  load_widened(b, group);
+  test::Owned x(1, narrow.channels, narrow.height(), narrow.width(), 9);
+  const std::vector<float> y = outputs(b.net, x.act);
+  REQUIRE(!y.empty());
+  CHECK(std::all_of(y.begin(), y.end(), [](float v) { return std::isfinite(v); }));
+}
+
+TEST_CASE("narrowing refuses a net no narrower, other changes and a group that is not the old config's", "[weights][narrow]") {
+  const ModelConfig wide = tiny_mask(0.25);
+  Net a(wide);
+  a.net.init(1);
+  const auto group = weights::group_of(a.params);
+  const auto fails = [&](const ModelConfig& from, const ModelConfig& to, const std::string& what) {
+    refuses([&] { weights::narrow_mask_group(group, from, to, "old.h5"); }, what);
+  };
+  fails(wide, tiny_mask(0.375), "narrower");
+  fails(wide, tiny_mask(0.25), "narrower");
+  fails(wide, tiny_mask(0.125, 5), "'mask' section");  // n_masks
+  fails(tiny_mask(0.375), tiny_mask(0.125), "shape");   // the group is 0.25's
+}
+
+TEST_CASE("yelan weights narrow: a file that loads under the narrower config and keeps the pose group", "[weights][narrow][cli]") {
+  TempDir dir("narrow");
+  std::ofstream(dir / "wide.json") << tiny_mask(0.25).json;
+  REQUIRE(yelan_cli({"weights", "init", "--config", dir / "wide.json", "--seed", "3", "-o", dir / "w.h5"}).code == 0);
+  const auto r = yelan_cli({"weights", "narrow", "--weights", dir / "w.h5", "--config", "tiny", "-o", dir / "x.h5"});
+  INFO(r.err);
+  REQUIRE(r.code == 0);
+  CHECK(has(r.out, "cut from width_mult 0.25 to 0.125 (16 -> 8 channels"));
+  const weights::Weights before = weights::load_weights(dir / "w.h5"), after = weights::load_weights(dir / "x.h5");
+  CHECK(after.groups.at("mask").at("inc.double_conv.0.weight").shape == weights::Shape{8, 6, 3, 3});
+  for (const auto& [k, t] : before.groups.at("pose")) CHECK(after.groups.at("pose").at(k).data == t.data);
+  CHECK_NOTHROW(weights::LoadedNetworks(after, dir / "x.h5"));
+
+  const auto wider = yelan_cli({"weights", "narrow", "--weights", dir / "x.h5", "--config", dir / "wide.json", "-o", dir / "y.h5"});
+  CHECK(wider.code == 2);
+  CHECK(has(wider.err, "narrower"));
+  CHECK(!std::filesystem::exists(dir / "y.h5"));
+  const auto missing = yelan_cli({"weights", "narrow", "--weights", dir / "w.h5", "-o", dir / "y.h5"});
+  CHECK(missing.code == 2);
+  CHECK(has(missing.err, "--config"));
+  std::ofstream(dir / "pose.json") << tiny_pose(0.125, 16, "bidirectional").json;  // a wider ConvLSTM
+  const auto pose = yelan_cli({"weights", "narrow", "--weights", dir / "w.h5", "--config", dir / "pose.json", "-o", dir / "y.h5"});
+  CHECK(pose.code == 2);
+  CHECK(has(pose.err, "changes the pose net"));
 }
