@@ -252,73 +252,82 @@ int combine(const Args& a, std::ostream& out) {
   return kOk;
 }
 
+// What widen and narrow share: W and the target config read, and the changed groups checked
+// against the config before anything is written. The config's run settings replace W's
+// (calibrate after training).
+struct Reshape {
+  std::string in, config, out;
+  weights::Weights w;
+  ModelConfig from, to;
+};
+
+Reshape read_reshape(const Args& a, const std::string& usage) {
+  a.expect_positionals(0, 0);
+  const auto in = a.value("--weights"), name = a.value("--config"), o = a.value("-o");
+  if (!in || !name || !o) throw UsageError(usage);
+  check_output("-o", *o, {*in, *name});
+  Reshape r{*in, *name, *o, {}, {}, {}};
+  // A bad config's ConfigError reaches cli.cpp's handler: exit 2 with its message.
+  r.to = load_model_config(*name);
+  r.w = weights::load_weights(*in);
+  r.from = parse_model_config(r.w.config_json, *in + ": attribute config");
+  return r;
+}
+
+// misfit: what failed to fit when the config refuses the result ("pose group does").
+void write_reshape(Reshape& r, const std::string& verb, const std::string& misfit) {
+  r.w.config_json = r.to.json;
+  try {
+    const weights::LoadedNetworks fits(r.w, r.in);
+  } catch (const std::exception& e) {
+    throw UsageError("weights " + verb + ": " + r.in + "'s " + misfit + " not fit --config " + r.config + ": " + e.what());
+  }
+  weights::save_weights(r.out, r.w);
+}
+
 // A trained stage 1 in a wider mask net that computes the same (weights_tools/widen.h), with
 // the pose group as it was: the start of a training at the new width.
 int widen(const Args& a, std::ostream& out) {
-  a.expect_positionals(0, 0);
-  const auto in = a.value("--weights"), name = a.value("--config"), o = a.value("-o");
-  if (!in || !name || !o) throw UsageError("weights widen needs --weights OLD.h5 --config NAME|FILE -o OUT.h5 [--seed N]");
-  check_output("-o", *o, {*in, *name});
+  Reshape r = read_reshape(a, "weights widen needs --weights OLD.h5 --config NAME|FILE -o OUT.h5 [--seed N]");
   const int seed = a.int_value_or("--seed", 0, 0, 2147483647);
-  // A bad config's ConfigError reaches cli.cpp's handler: exit 2 with its message.
-  const ModelConfig to = load_model_config(*name);
-  weights::Weights w = weights::load_weights(*in);
-  const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
+  const ModelConfig &from = r.from, &to = r.to;
   const bool mask = to.mask_width != from.mask_width, wider = to.pose_width != from.pose_width || to.hidden != from.hidden,
              outside = to.outside_input != from.outside_input, pose = wider || outside;
   if (!mask && !pose)
     throw UsageError("weights widen: config " + to.name +
-                     " has the same mask.width_mult, pose.width_mult, pose.hidden and pose.outside_input as " + *in +
+                     " has the same mask.width_mult, pose.width_mult, pose.hidden and pose.outside_input as " + r.in +
                      "; nothing to widen");
-  if (mask) w.groups["mask"] = weights::widen_mask_group(w.groups["mask"], from, to, std::uint64_t(seed) * 2 + 1, *in);
-  if (pose) w.groups["pose"] = weights::widen_pose_group(w.groups["pose"], from, to, std::uint64_t(seed) * 2 + 2, *in);
-  w.config_json = to.json;
-  try {
-    const weights::LoadedNetworks fits(w, *in);
-  } catch (const std::exception& e) {
-    const std::string groups = mask && pose ? "widened" : mask ? "pose" : "mask";
-    throw UsageError("weights widen: " + *in + "'s " + groups + " groups do not fit --config " + *name + ": " + e.what());
-  }
-  weights::save_weights(*o, w);
-  out << "wrote " << *o << ":";
+  if (mask) r.w.groups["mask"] = weights::widen_mask_group(r.w.groups["mask"], from, to, std::uint64_t(seed) * 2 + 1, r.in);
+  if (pose) r.w.groups["pose"] = weights::widen_pose_group(r.w.groups["pose"], from, to, std::uint64_t(seed) * 2 + 2, r.in);
+  write_reshape(r, "widen", mask && pose ? "widened groups do" : mask ? "pose group does" : "mask group does");
+  out << "wrote " << r.out << ":";
   if (mask)
     out << " mask net widened from width_mult " << from.mask_width << " to " << to.mask_width << " (" << from.unet_width(0)
-        << " -> " << to.unet_width(0) << " channels at the top level; the same outputs)" << (pose ? ";" : ", pose from " + *in + ",");
+        << " -> " << to.unet_width(0) << " channels at the top level; the same outputs)" << (pose ? ";" : ", pose from " + r.in + ",");
   if (wider)
     out << " pose net widened from width_mult " << from.pose_width << " to " << to.pose_width << " (" << from.resnet_mid() << " -> "
         << to.resnet_mid() << " channels into the ConvLSTM, hidden " << from.hidden << " -> " << to.hidden << ")";
   if (outside)
     out << (wider ? " and" : " pose net") << " given the input outside the mask (pose.outside_input: " << from.pose_channels()
         << " -> " << to.pose_channels() << " input channels, the new ones read by zero weights)";
-  if (pose) out << "; the same outputs" << (mask ? "," : ", mask from " + *in + ",");
-  out << " config " << to.name << " (its run settings, not " << *in << "'s: calibrate after training)\n";
+  if (pose) out << "; the same outputs" << (mask ? "," : ", mask from " + r.in + ",");
+  out << " config " << to.name << " (its run settings, not " << r.in << "'s: calibrate after training)\n";
   return kOk;
 }
 
 // A trained stage 1 cut to a narrower mask net (weights_tools/widen.h: the first channels of
 // every layer kept), with the pose group as it was: the start of a training at that width.
 int narrow(const Args& a, std::ostream& out) {
-  a.expect_positionals(0, 0);
-  const auto in = a.value("--weights"), name = a.value("--config"), o = a.value("-o");
-  if (!in || !name || !o) throw UsageError("weights narrow needs --weights OLD.h5 --config NAME|FILE -o OUT.h5");
-  check_output("-o", *o, {*in, *name});
-  const ModelConfig to = load_model_config(*name);
-  weights::Weights w = weights::load_weights(*in);
-  const ModelConfig from = parse_model_config(w.config_json, *in + ": attribute config");
+  Reshape r = read_reshape(a, "weights narrow needs --weights OLD.h5 --config NAME|FILE -o OUT.h5");
+  const ModelConfig &from = r.from, &to = r.to;
   if (to.pose_width != from.pose_width || to.hidden != from.hidden || to.outside_input != from.outside_input)
     throw UsageError("weights narrow: config " + to.name + " changes the pose net; narrowing cuts the mask net alone");
-  w.groups["mask"] = weights::narrow_mask_group(w.groups["mask"], from, to, *in);
-  w.config_json = to.json;
-  try {
-    const weights::LoadedNetworks fits(w, *in);
-  } catch (const std::exception& e) {
-    throw UsageError("weights narrow: " + *in + "'s pose group does not fit --config " + *name + ": " + e.what());
-  }
-  weights::save_weights(*o, w);
-  out << "wrote " << *o << ": mask net cut from width_mult " << from.mask_width << " to " << to.mask_width << " ("
+  r.w.groups["mask"] = weights::narrow_mask_group(r.w.groups["mask"], from, to, r.in);
+  write_reshape(r, "narrow", "pose group does");
+  out << "wrote " << r.out << ": mask net cut from width_mult " << from.mask_width << " to " << to.mask_width << " ("
       << from.unet_width(0) << " -> " << to.unet_width(0) << " channels at the top level, the first of each layer kept; "
-      << "not the same outputs: train it), pose from " << *in << ", config " << to.name
-      << " (its run settings, not " << *in << "'s: calibrate after training)\n";
+      << "not the same outputs: train it), pose from " << r.in << ", config " << to.name
+      << " (its run settings, not " << r.in << "'s: calibrate after training)\n";
   return kOk;
 }
 

@@ -470,4 +470,11 @@ TEST_CASE("yelan weights narrow: a file that loads under the narrower config and
   const auto pose = yelan_cli({"weights", "narrow", "--weights", dir / "w.h5", "--config", dir / "pose.json", "-o", dir / "y.h5"});
   CHECK(pose.code == 2);
   CHECK(has(pose.err, "changes the pose net"));
+  std::string stages = tiny_mask(0.125).json;  // narrower, and a pose net the old group does not fill
+  stages.replace(stages.find("\"stages\": 2"), 11, "\"stages\": 3");
+  std::ofstream(dir / "stages.json") << stages;
+  const auto misfit = yelan_cli({"weights", "narrow", "--weights", dir / "w.h5", "--config", dir / "stages.json", "-o", dir / "y.h5"});
+  CHECK(misfit.code == 2);
+  CHECK(has(misfit.err, "w.h5's pose group does not fit --config"));
+  CHECK(!std::filesystem::exists(dir / "y.h5"));
 }
