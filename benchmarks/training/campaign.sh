@@ -758,7 +758,9 @@ case "$what" in
   # 2.06 against 4.60 GFLOP a run, IoU 0.710 untrained against 0.776), trained by the recipe on
   # sk-s56's first quarter (windows drawn by seed 12) at lr 3e-4 (the recipe's 1e-4 fine-tunes a
   # converged net; a third of every layer's inputs is gone here): does a cheaper stage 1 run
-  # often enough beat the shipped one reused longer, as deployed?
+  # often enough beat the shipped one reused longer, as deployed? Ran 2160 s at two threads: mask IoU
+  # as deployed 0.747 every tick, 0.723 under the cap 3 (the default's 0.722 under the cap 6) at
+  # x1.05 its poses/s on Zen 3; validation still rising at the end (models/README, sixty-first).
   train-mask-s61n)
     start=$RUNS/mask0.25-narrowed.h5
     [ -f "$start" ] || "$Y" weights narrow --weights models/default.h5 --config "$NARROW_CFG" -o "$start"
