@@ -765,6 +765,23 @@ case "$what" in
     start=$RUNS/mask0.25-narrowed.h5
     [ -f "$start" ] || "$Y" weights narrow --weights models/default.h5 --config "$NARROW_CFG" -o "$start"
     MASK_CFG=benchmarks/configs/small-pose0.125.json MASK_LR=3e-4 mask_recipe mask-s61n "$DATA_S56/train" "${MASK_S61_STEPS:-600}" 12 "$start" ;;
+  # pose-s62 (sixty-second session): the shipped stage 2 (pose-s35, trained behind mask-s32's
+  # reused masks on sk-fpr-mix's 480 recordings) fine-tuned behind the shipped stage 1's reused
+  # masks on sk-s56's first-quarter dancers (224 recordings no stage 2 has seen: random looks,
+  # free arms on half of them, the front cue drawn 0.5-2, 64 in furnished rooms; its empty
+  # scenes would only fill batches, their joints weigh nothing), windows drawn by seed 13.
+  train-pose-s62)
+    dancers=$RUNS/sk-s56-q1-dancers
+    mkdir -p "$dancers"
+    for f in "$DATA_S56"/train/train-00[01][0-9][0-9]-*.yelan.h5 "$DATA_S56"/train/train-dancer-room-000[0-6][0-9]-*.yelan.h5; do
+      n=$(basename "$f"); i=$(echo "$n" | grep -o '[0-9]\{5\}' | head -1)
+      lim=160; case $n in train-dancer-room-*) lim=64 ;; esac
+      if [ $((10#$i)) -lt $lim ]; then ln -sf "$f" "$dancers/$n"; fi
+    done
+    [ "$(ls "$dancers" | wc -l)" = 224 ] || { echo "sk-s56's first quarter is not complete: S56_QUARTERS=1 $0 data-s56" >&2; exit 1; }
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s58.json DATA=$dancers \
+      train pose pose-s62 "${POSE_S62_STEPS:-2000}" --val-data "$DATA_SK_FP2/val" --lr 3e-4 --seed 13 \
+      --init models/default.h5 --mask-weights models/default.h5 --mask-reuse 16 ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;

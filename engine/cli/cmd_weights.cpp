@@ -288,8 +288,8 @@ void write_reshape(Reshape& r, const std::string& verb, const std::string& misfi
 // A trained stage 1 in a wider mask net that computes the same (weights_tools/widen.h), with
 // the pose group as it was: the start of a training at the new width.
 int widen(const Args& a, std::ostream& out) {
+  const int seed = a.int_value_or("--seed", 0, 0, 2147483647);  // a bad value said before any file is read
   Reshape r = read_reshape(a, "weights widen needs --weights OLD.h5 --config NAME|FILE -o OUT.h5 [--seed N]");
-  const int seed = a.int_value_or("--seed", 0, 0, 2147483647);
   const ModelConfig &from = r.from, &to = r.to;
   const bool mask = to.mask_width != from.mask_width, wider = to.pose_width != from.pose_width || to.hidden != from.hidden,
              outside = to.outside_input != from.outside_input, pose = wider || outside;
