@@ -528,6 +528,51 @@ TEST_CASE("train: --windows-per-visit decides the windows drawn, is kept in run.
   CHECK(yelan::test::contains(sim.err, "--data only"));
 }
 
+TEST_CASE("train: --validate-start logs the starting weights' validation as step 0 and trains as a run without it", "[train][cli]") {
+  yelan::test::CliTempDir d("train-vstart");
+  one_recording_dataset(d / "ds", "0.6s");
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> v = {"train", "--stage", "pose", "--config", "micro", "--data", d / "ds", "--epoch-steps", "2",
+                                  "--val-windows", "2", "--batch", "2", "--threads", "1", "-o", d / out, "--steps", "4"};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  auto rows = [&](const std::string& out) {  // step, training loss, validation loss, validation MPJPE
+    std::istringstream in(yelan::test::slurp(d / (out + "/log.csv")));
+    std::vector<std::vector<std::string>> all;
+    std::string line;
+    std::getline(in, line);
+    while (std::getline(in, line)) {
+      std::istringstream l(line);
+      std::vector<std::string> c(11);
+      for (auto& x : c) std::getline(l, x, ',');
+      all.push_back({c[0], c[2], c[3], c[8]});
+    }
+    return all;
+  };
+  const auto plain = run("plain", {});
+  const auto start = run("start", {"--validate-start"});
+  INFO(start.err);
+  REQUIRE(plain.code == 0);
+  REQUIRE(start.code == 0);
+  CHECK(yelan::test::contains(start.err, "step 0 (the start): validation "));
+  CHECK_FALSE(yelan::test::contains(plain.err, "step 0 (the start)"));
+  const auto p = rows("plain"), s = rows("start");
+  REQUIRE(p.size() == 4);
+  REQUIRE(s.size() == 5);
+  CHECK(s[0][0] == "0");
+  CHECK(s[0][1] == "-1");                 // no training step behind it
+  CHECK(std::stod(s[0][3]) > 0);          // an MPJPE in mm
+  CHECK(s[0][2] != s[2][2]);              // the untrained net scores otherwise than after two steps
+  for (std::size_t k = 0; k < p.size(); ++k) CHECK(s[k + 1] == p[k]);  // the same run after it
+  CHECK(yelan::test::slurp(d / "start/final.h5") == yelan::test::slurp(d / "plain/final.h5"));
+  CHECK(yelan::test::slurp(d / "start/best.h5") == yelan::test::slurp(d / "plain/best.h5"));
+  // Stopped and resumed: the step-0 row once, the rest as the whole run.
+  REQUIRE(run("b", {"--validate-start", "--stop-at", "2"}).code == 0);
+  REQUIRE(run("b", {"--validate-start", "--resume"}).code == 0);
+  CHECK(rows("b") == s);
+}
+
 TEST_CASE("train: --mask-reuse masks stage 2 as early exit does, is kept in run.json, resumes bit-exactly, needs --mask-weights", "[train][cli]") {
   yelan::test::CliTempDir d("train-reuse");
   one_recording_dataset(d / "ds", "0.8s");

@@ -210,6 +210,19 @@ sk_run() {
     --val-data "$dir/val" --lr 1e-3 "$@"
 }
 
+# s56_dancers DIR Q: DIR gets links to the dancer recordings of sk-s56's first Q quarters (160
+# plain and 64 in furnished rooms a quarter; not its empty scenes: their joints weigh nothing
+# in stage 2's loss), or the command fails naming the data-s56 run that is missing.
+s56_dancers() {
+  local dir=$1 q=$2 f
+  mkdir -p "$dir"
+  for f in $(seq -f "$DATA_S56/train/train-%05g-*.yelan.h5" 0 $((160 * q - 1))) \
+      $(seq -f "$DATA_S56/train/train-dancer-room-%05g-*.yelan.h5" 0 $((64 * q - 1))); do
+    [ -f "$f" ] || { echo "sk-s56 lacks ${f##*/}: S56_QUARTERS='$(seq -s ' ' 1 "$q")' $0 data-s56" >&2; exit 1; }
+    ln -sf "$f" "$dir/${f##*/}"
+  done
+}
+
 # data_neg: sk-neg, stage 1's empty scenes and furnished rooms with nobody in them (seed 3),
 # its training and validation splits (resumes).
 data_neg() {
@@ -771,17 +784,18 @@ case "$what" in
   # free arms on half of them, the front cue drawn 0.5-2, 64 in furnished rooms; its empty
   # scenes would only fill batches, their joints weigh nothing), windows drawn by seed 13.
   train-pose-s62)
-    dancers=$RUNS/sk-s56-q1-dancers
-    mkdir -p "$dancers"
-    for f in "$DATA_S56"/train/train-00[01][0-9][0-9]-*.yelan.h5 "$DATA_S56"/train/train-dancer-room-000[0-6][0-9]-*.yelan.h5; do
-      n=$(basename "$f"); i=$(echo "$n" | grep -o '[0-9]\{5\}' | head -1)
-      lim=160; case $n in train-dancer-room-*) lim=64 ;; esac
-      if [ $((10#$i)) -lt $lim ]; then ln -sf "$f" "$dancers/$n"; fi
-    done
-    [ "$(ls "$dancers" | wc -l)" = 224 ] || { echo "sk-s56's first quarter is not complete: S56_QUARTERS=1 $0 data-s56" >&2; exit 1; }
-    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s58.json DATA=$dancers \
+    s56_dancers "$RUNS/sk-s56-q1-dancers" 1
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s58.json DATA=$RUNS/sk-s56-q1-dancers \
       train pose pose-s62 "${POSE_S62_STEPS:-2000}" --val-data "$DATA_SK_FP2/val" --lr 3e-4 --seed 13 \
       --init models/default.h5 --mask-weights models/default.h5 --mask-reuse 16 ;;
+  # pose-s63 (sixty-third session): pose-s62's recipe on twice the recordings (the dancers of
+  # sk-s56's first two quarters, 448), windows drawn by seed 14: pose-s62 fitted its 224
+  # recordings (-37 mm on them) and nothing held out; does doubling them reach new people?
+  train-pose-s63)
+    s56_dancers "$RUNS/sk-s56-q12-dancers" 2
+    CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s58.json DATA=$RUNS/sk-s56-q12-dancers \
+      train pose pose-s63 "${POSE_S63_STEPS:-2000}" --val-data "$DATA_SK_FP2/val" --lr 3e-4 --seed 14 \
+      --init models/default.h5 --mask-weights models/default.h5 --mask-reuse 16 --validate-start ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;

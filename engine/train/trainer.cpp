@@ -361,7 +361,8 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       throw std::runtime_error(state_path + " does not belong to " + ckpt +
                                " (a run stopped between writing the two): cannot resume exactly");
     adam.set_state(st.moments, st.adam_t, st.adam_epochs, st.lr);
-    truncate_log(log_path, st.step);
+    // A run that validates its start and stopped before its first step writes that row again.
+    truncate_log(log_path, spec.validate_start && st.step == 0 ? -1 : st.step);
     err << "resuming " << spec.out_dir << " at step " << st.step << "\n";
   } else {
     std::ofstream(log_path) << kLogHeader << "\n";
@@ -524,6 +525,19 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   if (st.bad_epochs >= spec.patience) {
     result.early_stopped = true;
     err << "this run had already stopped early (no better validation loss for " << spec.patience << " epochs)\n";
+  }
+  if (spec.validate_start && st.step == 0 && !result.early_stopped) {
+    // The start's own score on the same windows, so a fine-tune's first epoch has a baseline.
+    // Logged only: best.h5 stays the best of the trained epochs.
+    const ValScore v = validate();
+    const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC + cpu_base;
+    log << 0 << "," << adam.epochs() << "," << -1 << "," << std::setprecision(9) << v.loss << "," << (cosine ? scheduled_lr(spec, 0) : adam.lr())
+        << "," << 0 << "," << 0 << "," << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << ","
+        << v.mpjpe_mm << "," << std::setprecision(6) << cpu << "," << std::setprecision(4) << v.mask_iou[0] << "\n";
+    log.flush();
+    err << "step 0 (the start): validation " << v.loss
+        << (v.mpjpe_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(v.mpjpe_mm))) + " mm" : "")
+        << (v.mask_iou[0] >= 0 ? ", validation mask IoU " + std::to_string(v.mask_iou[0]).substr(0, 5) : "") << "\n";
   }
   const std::int64_t first_step = st.step;
   double data_s = 0, step_s = 0;  // since the last epoch line: building batches, whole steps

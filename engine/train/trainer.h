@@ -76,6 +76,8 @@ struct TrainSpec {
   std::string init_weights;         // start from these instead of a random initialisation
   std::string out_dir;
   bool resume = false;
+  // validate the starting weights before step 1 and log them as step 0 (not a best.h5 candidate)
+  bool validate_start = false;
   double frame_hz = 50;
   bool progress_tty = false;        // a live progress line (else one line per epoch)
   double max_minutes = 0;           // stop (with a checkpoint) after this long; 0: no limit
