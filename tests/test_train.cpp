@@ -13,6 +13,7 @@
 #include "cli_util.h"
 #include "engine/train/metrics.h"
 #include "engine/train/pose_norm.h"
+#include "weights_tools/weights_file.h"
 
 using namespace yelan::train;
 
@@ -571,6 +572,52 @@ TEST_CASE("train: --validate-start logs the starting weights' validation as step
   REQUIRE(run("b", {"--validate-start", "--stop-at", "2"}).code == 0);
   REQUIRE(run("b", {"--validate-start", "--resume"}).code == 0);
   CHECK(rows("b") == s);
+}
+
+TEST_CASE("train: --freeze-bn keeps the pose net's BatchNorm statistics and trains the rest, is kept in run.json, resumes bit-exactly", "[train][cli]") {
+  yelan::test::CliTempDir d("train-freeze-bn");
+  one_recording_dataset(d / "ds", "0.6s");
+  auto run = [&](const std::string& out, std::vector<std::string> extra) {
+    std::vector<std::string> v = {"train", "--stage", "pose", "--config", "micro", "--data", d / "ds", "--epoch-steps", "2",
+                                  "--val-windows", "1", "--batch", "2", "--threads", "1", "-o", d / out, "--steps", "3"};
+    v.insert(v.end(), extra.begin(), extra.end());
+    return yelan::test::run_cli(v);
+  };
+  REQUIRE(run("start", {}).code == 0);
+  const std::string init = d / "start/final.h5";
+  const auto frozen = run("f", {"--init", init, "--freeze-bn"});
+  INFO(frozen.err);
+  REQUIRE(frozen.code == 0);
+  REQUIRE(run("g", {"--init", init}).code == 0);
+  namespace w = yelan::weights;
+  const w::Weights ws = w::load_weights(init), wf = w::load_weights(d / "f/final.h5"), wg = w::load_weights(d / "g/final.h5");
+  const auto &s0 = ws.groups.at("pose"), &f = wf.groups.at("pose"), &g = wg.groups.at("pose");
+  int stats = 0, stats_moved_unfrozen = 0, params_moved = 0;
+  for (const auto& [k, t] : s0) {
+    if (w::is_parameter(k)) {
+      params_moved += f.at(k).data != t.data;
+    } else {
+      ++stats;
+      CHECK(f.at(k).data == t.data);  // running mean, variance, batches tracked: the start's
+      stats_moved_unfrozen += g.at(k).data != t.data;
+    }
+  }
+  CHECK(stats > 0);
+  CHECK(stats_moved_unfrozen == stats);  // without the flag every one of them moves
+  CHECK(params_moved > 0);
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "f/run.json"), "\"freeze_bn\": true,"));
+  CHECK(yelan::test::contains(yelan::test::slurp(d / "g/run.json"), "\"freeze_bn\": false,"));
+  // Stopped and resumed with the flag: the uninterrupted run; without it: refused.
+  REQUIRE(run("b", {"--init", init, "--freeze-bn", "--stop-at", "1"}).code == 0);
+  const auto unfrozen = run("b", {"--init", init, "--resume"});
+  CHECK(unfrozen.code != 0);
+  CHECK(yelan::test::contains(unfrozen.err, "trained with --freeze-bn"));
+  REQUIRE(run("b", {"--init", init, "--freeze-bn", "--resume"}).code == 0);
+  CHECK(yelan::test::slurp(d / "b/final.h5") == yelan::test::slurp(d / "f/final.h5"));
+  const auto mask = yelan::test::run_cli({"train", "--stage", "mask", "--config", "micro", "--data", d / "ds", "-o", d / "m",
+                                          "--steps", "1", "--freeze-bn"});
+  CHECK(mask.code == 2);
+  CHECK(yelan::test::contains(mask.err, "--stage pose only"));
 }
 
 TEST_CASE("train: --mask-reuse masks stage 2 as early exit does, is kept in run.json, resumes bit-exactly, needs --mask-weights", "[train][cli]") {

@@ -55,7 +55,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight", "--mask-focus",
                 "--windows-per-visit", "--mask-reuse"},
-               {"--occlusion", "--warp", "--flip", "--frame-zoom", "--swap-loss", "--resume", "--quiet", "--validate-start"});
+               {"--occlusion", "--warp", "--flip", "--frame-zoom", "--swap-loss", "--resume", "--quiet", "--validate-start", "--freeze-bn"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
   const auto data = a.value("--data");
@@ -157,6 +157,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.max_cpu_minutes = a.number_or("--max-cpu-minutes", 0, 0, 1e7, true);
   spec.resume = a.flag("--resume");
   spec.validate_start = a.flag("--validate-start");
+  spec.freeze_bn = a.flag("--freeze-bn");
+  if (spec.freeze_bn && spec.stage != "pose") throw UsageError("--freeze-bn: for --stage pose only");
   spec.progress_tty = &err == &std::cerr && ::isatty(STDERR_FILENO) && !a.flag("--quiet");
   const train::TrainResult r = train::train(spec, err);
   out << spec.out_dir << ": " << r.steps << " steps, last loss " << r.last_loss << ", best validation " << r.best_val

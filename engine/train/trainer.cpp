@@ -182,6 +182,12 @@ void truncate_log(const std::string& path, std::int64_t step) {
   tmp.commit();
 }
 
+// A run.json key as the command line spells its flag (frame_zoom: frame-zoom).
+std::string flag_name(std::string key) {
+  std::replace(key.begin(), key.end(), '_', '-');
+  return key;
+}
+
 std::string eta_text(double s) {
   std::ostringstream o;
   if (s >= 3600) o << int(s / 3600) << "h" << std::setw(2) << std::setfill('0') << int(s / 60) % 60 << "m";
@@ -221,6 +227,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     throw std::invalid_argument("LR schedule must be cosine or step, got '" + spec.lr_schedule + "'");
   const bool cosine = spec.lr_schedule == "cosine";
   if (spec.empty_weight != 1 && pose_stage) throw std::invalid_argument("the empty-scene weight is for the mask stage");
+  if (spec.freeze_bn && !pose_stage) throw std::invalid_argument("frozen BatchNorm statistics are for the pose stage");
   if (!(spec.empty_weight > 0)) throw std::invalid_argument("the empty-scene weight must be > 0");
   if (spec.dice_weight != 0 && pose_stage) throw std::invalid_argument("the Dice weight is for the mask stage");
   if (!(spec.dice_weight >= 0)) throw std::invalid_argument("the Dice weight must be >= 0");
@@ -268,10 +275,10 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                   std::to_string(wpv) + ")");
     // Nor does a run with other augmentations (run.json without a key: the option was off).
     for (const auto& [key, on] : {std::pair<const char*, bool>{"occlusion", spec.occlusion}, {"warp", spec.warp}, {"flip", spec.flip},
-                                {"frame_zoom", spec.frame_zoom}, {"swap_loss", spec.swap_loss}}) {
+                                {"frame_zoom", spec.frame_zoom}, {"swap_loss", spec.swap_loss}, {"freeze_bn", spec.freeze_bn}}) {
       const bool was = resumed.contains(key) && resumed[key].is_boolean() && resumed[key].get<bool>();
       if (was != on)
-        throw std::invalid_argument(run_json + ": the run was trained " + (was ? "with" : "without") + " --" + key +
+        throw std::invalid_argument(run_json + ": the run was trained " + (was ? "with" : "without") + " --" + flag_name(key) +
                                     " (resume " + (was ? "with" : "without") + " it)");
     }
     const int reuse = resumed.contains("mask_reuse") && resumed["mask_reuse"].is_number_integer() ? resumed["mask_reuse"].get<int>() : 0;
@@ -294,7 +301,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
                                       {"windows_per_visit", spec.windows_per_visit},
                                       {"occlusion", spec.occlusion},   {"warp", spec.warp},
                                       {"flip", spec.flip},             {"frame_zoom", spec.frame_zoom},
-                                      {"swap_loss", spec.swap_loss},
+                                      {"swap_loss", spec.swap_loss},   {"freeze_bn", spec.freeze_bn},
                                       {"mask_reuse", spec.mask_reuse},
                                       {"empty_weight", spec.empty_weight}, {"dice_weight", spec.dice_weight},
                                       {"mask_focus", spec.mask_focus},
@@ -429,6 +436,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   };
   // The validation windows are fixed for the run: built once (inputs behind the frozen mask
   // net, targets), scored in eval mode at every epoch's end.
+  // The frozen mask net runs with its running statistics; with --freeze-bn so does the trained
+  // net's BatchNorm (fixed statistics, not updated; its affine weights still learn).
+  auto train_mode = [&] {
+    mask.set_training(!pose_stage && !spec.freeze_bn);
+    pose.set_training(pose_stage && !spec.freeze_bn);
+  };
   std::vector<std::unique_ptr<BatchBuilder>> val_batches;
   auto build_validation = [&] {
     // The split's recordings in turn, each window at a seeded time: the training stream's
@@ -507,8 +520,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       }
       windows += nw;
     }
-    mask.set_training(!pose_stage);
-    pose.set_training(pose_stage);
+    train_mode();
     ValScore v;
     v.loss = sum / windows;
     if (pose_stage) v.mpjpe_mm = metrics.scores().mpjpe_mm;
@@ -517,8 +529,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     return v;
   };
 
-  mask.set_training(!pose_stage);  // the frozen mask net runs with its running statistics
-  pose.set_training(pose_stage);
+  train_mode();
   double loss = 0, grad_norm = 0;
   TrainResult result;
   const StopOnSignal stop;

@@ -62,6 +62,10 @@ struct TrainSpec {
   // each window scored against its joints or with left and right traded, whichever the net
   // is nearer to (hpe_loss's swap_group), training and validation loss; MPJPE stays strict
   bool swap_loss = false;
+  // the trained net's BatchNorm layers keep the starting weights' running statistics and
+  // normalise by them in training too (a fine-tune in small batches of few recordings: each
+  // batch's statistics would otherwise pull the running ones towards its own recordings)
+  bool freeze_bn = false;
   float empty_weight = 1;           // mask stage: a window showing nobody weighs this much in
                                     // the loss (nobody_weights); validation is never weighted
   float dice_weight = 0;            // mask stage: the soft Dice term's weight (mask_loss); the
