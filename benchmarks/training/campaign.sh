@@ -798,9 +798,9 @@ case "$what" in
       --init models/default.h5 --mask-weights models/default.h5 --mask-reuse 16 --validate-start ;;
   # pose-s63f: the same with the pose net's BatchNorm statistics frozen (--freeze-bn), 1000 steps.
   # pose-s63 went from its start's 185 mm on the trainer's validation to 210 by step 250 (and
-  # pose-s62's windows from 187 to 191 in its first step, at lr 6e-6; 193 with the statistics
-  # frozen, 187 at lr 1e-30: Adam's first step moves every weight by the rate). Do batches that
-  # leave the statistics alone forget less of what held-out dancers need?
+  # pose-s62's windows from 187 to 191 in one step at 3e-4; 193 with the statistics frozen, 187
+  # at lr 1e-30). Do batches that leave the statistics alone forget less of what held-out
+  # dancers need? No: 224 at step 250 (models/README, sixty-third session).
   train-pose-s63f)
     s56_dancers "$RUNS/sk-s56-q12-dancers" 2
     CFG=benchmarks/configs/small-mask0.375-pose0.125-masked-reuse-b094-crop8-s58.json DATA=$RUNS/sk-s56-q12-dancers \
