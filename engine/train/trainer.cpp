@@ -434,14 +434,14 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     save_state(state_path, st);
     last_ckpt = std::chrono::steady_clock::now();
   };
-  // The validation windows are fixed for the run: built once (inputs behind the frozen mask
-  // net, targets), scored in eval mode at every epoch's end.
   // The frozen mask net runs with its running statistics; with --freeze-bn so does the trained
   // net's BatchNorm (fixed statistics, not updated; its affine weights still learn).
   auto train_mode = [&] {
     mask.set_training(!pose_stage && !spec.freeze_bn);
     pose.set_training(pose_stage && !spec.freeze_bn);
   };
+  // The validation windows are fixed for the run: built once (inputs behind the frozen mask
+  // net, targets), scored in eval mode at every epoch's end.
   std::vector<std::unique_ptr<BatchBuilder>> val_batches;
   auto build_validation = [&] {
     // The split's recordings in turn, each window at a seeded time: the training stream's
