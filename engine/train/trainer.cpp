@@ -70,6 +70,20 @@ constexpr const char* kLogHeader =
     "step,epoch,loss,val_loss,lr,grad_norm,samples_per_s,wall_s,val_mpjpe_mm,cpu_s,val_mask_iou";
 constexpr int kLogCommas = 10;
 
+// One row of log.csv, in kLogHeader's order; -1 where a value does not apply to the row.
+struct LogRow {
+  std::int64_t step;
+  int epoch;
+  double loss, val_loss, lr, grad_norm, samples_per_s, wall_s, val_mpjpe_mm, cpu_s, val_mask_iou;
+};
+
+void write_log_row(std::ostream& log, const LogRow& r) {
+  log << r.step << "," << r.epoch << "," << std::setprecision(9) << r.loss << "," << r.val_loss << "," << r.lr << ","
+      << r.grad_norm << "," << std::setprecision(4) << r.samples_per_s << "," << r.wall_s << "," << r.val_mpjpe_mm << ","
+      << std::setprecision(6) << r.cpu_s << "," << std::setprecision(4) << r.val_mask_iou << "\n";
+  log.flush();
+}
+
 // The learning rate at a step under the spec's schedule (cosine: a function of the step
 // alone, so --resume needs nothing more).
 double scheduled_lr(const TrainSpec& s, std::int64_t step) {
@@ -542,10 +556,9 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     // Logged only: best.h5 stays the best of the trained epochs.
     const ValScore v = validate();
     const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC + cpu_base;
-    log << 0 << "," << adam.epochs() << "," << -1 << "," << std::setprecision(9) << v.loss << "," << (cosine ? scheduled_lr(spec, 0) : adam.lr())
-        << "," << 0 << "," << 0 << "," << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << ","
-        << v.mpjpe_mm << "," << std::setprecision(6) << cpu << "," << std::setprecision(4) << v.mask_iou[0] << "\n";
-    log.flush();
+    write_log_row(log, {0, adam.epochs(), -1, v.loss, cosine ? scheduled_lr(spec, 0) : adam.lr(), 0, 0,
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), v.mpjpe_mm, cpu,
+                        v.mask_iou[0]});
     err << "step 0 (the start): validation " << v.loss
         << (v.mpjpe_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(v.mpjpe_mm))) + " mm" : "")
         << (v.mask_iou[0] >= 0 ? ", validation mask IoU " + std::to_string(v.mask_iou[0]).substr(0, 5) : "") << "\n";
@@ -553,11 +566,13 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
   const std::int64_t first_step = st.step;
   double data_s = 0, step_s = 0;  // since the last epoch line: building batches, whole steps
   std::int64_t swap_groups = 0, swapped = 0;  // --swap-loss: windows scored, and of them traded, since then
+  // One window's buffers serve every window: its frames' TORE read-outs (2 MB each at the
+  // sensor's size) allocated afresh each time cost the kernel's page clearing and faults.
+  sim::SimWindow w;
   while (st.step < spec.steps && !result.early_stopped) {
     const auto t0 = std::chrono::steady_clock::now();
     builder.clear();
     for (int b = 0; b < spec.batch; ++b) {
-      sim::SimWindow w;
       stream.next(w);
       sim::Rng occ(spec.seed, 0x0cc1u + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       // Its own stream, so the occluders of a run with --warp are those of one without.
@@ -632,10 +647,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
       }
     }
     const double cpu = double(std::clock() - cpu_start) / CLOCKS_PER_SEC + cpu_base;
-    log << st.step << "," << adam.epochs() << "," << std::setprecision(9) << loss << "," << val << "," << adam.lr() << ","
-        << grad_norm << "," << std::setprecision(4) << sps << "," << wall << "," << val_mm << "," << std::setprecision(6)
-        << cpu << "," << std::setprecision(4) << val_iou << "\n";
-    log.flush();
+    write_log_row(log, {st.step, adam.epochs(), loss, val, adam.lr(), grad_norm, sps, wall, val_mm, cpu, val_iou});
     const double eta = wall / double(st.step - first_step) * double(spec.steps - st.step);
     if (spec.progress_tty)
       err << "\rstep " << st.step << "/" << spec.steps << "  epoch " << adam.epochs() << "  loss " << std::fixed
