@@ -518,6 +518,11 @@ TEST_CASE("train: --windows-per-visit decides the windows drawn, is kept in run.
   REQUIRE(run("b", {"--windows-per-visit", "1", "--resume"}).code == 0);
   CHECK(yelan::test::slurp(d / "b/final.h5") == yelan::test::slurp(d / "one/final.h5"));
   CHECK(run("zero", {"--windows-per-visit", "0"}).code == 2);
+  // The batch's two windows read on two threads (both cursors in the one file): the same
+  // windows, so the same weights byte for byte.
+  REQUIRE(run("eight-r2", {"--read-threads", "2"}).code == 0);
+  CHECK(yelan::test::slurp(d / "eight-r2/final.h5") == yelan::test::slurp(d / "eight/final.h5"));
+  CHECK(run("r0", {"--read-threads", "0"}).code == 2);
   // --flip mirrors some of the same windows: other losses, and run.json says so.
   REQUIRE(run("f", {"--windows-per-visit", "1", "--flip"}).code == 0);
   CHECK(losses("f") != losses("one"));

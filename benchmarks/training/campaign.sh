@@ -825,6 +825,18 @@ case "$what" in
   # the held-out score and gains on it (models/README, sixty-fourth session).
   train-pose-s63-lr3e5)
     POSE_LR=3e-5 s56_pose pose-s63-lr3e5 "${POSE_S63L_STEPS:-1000}" 14 2 --validate-start ;;
+  # ev-s64 (sixty-fourth session on): sk-sided's stick net trained on the events of sk-s56's 448
+  # dancers by ev-fp2's recipe (lr 1e-3 cosine, true masks, 4000 steps, windows drawn by seed
+  # 18): does a fresh stage 2 on three times ev-fp2's dancers reach held-out ones? Its state at
+  # step 1130 is in models/campaign/ev-s64 (copied into $RUNS when $RUNS has none).
+  train-ev-s64)
+    dir=$RUNS/sk-s56-q12-dancers
+    s56_dancers "$dir" 2
+    if [ ! -f "$RUNS/ev-s64/checkpoint.state" ] && [ -f models/campaign/ev-s64/checkpoint.state ]; then
+      mkdir -p "$RUNS/ev-s64" && cp models/campaign/ev-s64/{checkpoint.h5,checkpoint.state,log.csv} "$RUNS/ev-s64/"
+    fi
+    CFG=$STICK_CFG0 DATA=$dir THREADS=${THREADS:-2} train pose ev-s64 "${EV_S64_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" \
+      --lr 1e-3 --seed 18 --init models/campaign/sk-sided/checkpoint.h5 --validate-start ;;
   train-ev-fpr)
     CFG=$STICK_CFG0 DATA=$DATA_FPR_MIX/train train pose ev-fpr "${FPR_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" --lr 5e-4 \
       --init "${EV_INIT:-models/campaign/ev-fp2/checkpoint.h5}" ;;

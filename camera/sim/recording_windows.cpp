@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <stdexcept>
 
 #include "camera/io/event_reader.h"
@@ -142,7 +143,7 @@ void RecordingWindowStream::fill(Open& r, std::size_t first, bool fresh, SimWind
   }
 }
 
-void RecordingWindowStream::next_from_cursor(SimWindow& out) {
+RecordingWindowStream::Planned RecordingWindowStream::plan_from_cursor() {
   const std::size_t S = std::size_t(opt_.window);
   const std::uint64_t B = std::uint64_t(opt_.cursors), M = std::uint64_t(opt_.windows_per_visit);
   const std::uint64_t b = k_ % B, step = k_ / B, visit = step / M, j = step % M;
@@ -162,28 +163,62 @@ void RecordingWindowStream::next_from_cursor(SimWindow& out) {
   // M slots side by side, one window inside each: increasing times, never overlapping (a
   // recording too short for M slots gives overlapping picks, each read afresh).
   const std::size_t slot = frames / M;
-  std::size_t first;
-  bool fresh = true;
+  Planned p{&r, 0, true};
   if (slot >= S) {
-    first = r.first_mask + j * slot + hash64(seed_, 0x5107 + b, visit * M + j) % (slot - S + 1);
-    fresh = first < c.end;  // behind the reader: seek back
+    p.first = r.first_mask + j * slot + hash64(seed_, 0x5107 + b, visit * M + j) % (slot - S + 1);
+    p.fresh = p.first < c.end;  // behind the reader: seek back
   } else {
-    first = r.first_mask + hash64(seed_, 0x5107 + b, visit * M + j) % (frames - S + 1);
+    p.first = r.first_mask + hash64(seed_, 0x5107 + b, visit * M + j) % (frames - S + 1);
   }
+  c.end = p.first + S;
+  ++k_;
+  return p;
+}
+
+void RecordingWindowStream::read_planned(const Planned& p, SimWindow& out) {
+  Open& r = *p.open;
   // Read on from the last window: the TORE then equals a fresh one started history_s before
   // (events older than TORE's tau read 0 either way), so a resumed run is bit-exact.
-  if (!fresh && !r.counts.empty()) {
-    r.feed(r.info.mask_t[first] - std::llround(1e6 / opt_.frame_hz));
+  if (!p.fresh && !r.counts.empty()) {
+    r.feed(r.info.mask_t[p.first] - std::llround(1e6 / opt_.frame_hz));
     std::fill(r.counts.begin(), r.counts.end(), 0.f);
   }
-  fill(r, first, fresh, out);
-  c.end = first + S;
-  ++k_;
+  fill(r, p.first, p.fresh, out);
+}
+
+void RecordingWindowStream::next_batch(std::span<SimWindow> out, int threads) {
+  if (!opt_.shuffle || (opt_.cursors == 1 && opt_.windows_per_visit == 1) || threads <= 1) {
+    for (SimWindow& w : out) next(w);
+    return;
+  }
+  // Consecutive windows come from consecutive cursors: any `cursors` of them from distinct ones.
+  const std::size_t group = std::size_t(opt_.cursors);
+  std::vector<Planned> plans;
+  std::vector<std::exception_ptr> errors;
+  for (std::size_t g = 0; g < out.size(); g += group) {
+    const std::size_t n = std::min(group, out.size() - g);
+    plans.clear();
+    for (std::size_t i = 0; i < n; ++i) plans.push_back(plan_from_cursor());
+    errors.assign(n, nullptr);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(std::min<int>(threads, int(n)))
+    for (std::size_t i = 0; i < n; ++i) {
+      try {
+        read_planned(plans[i], out[g + i]);
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    }
+    for (const auto& e : errors)
+      if (e) std::rethrow_exception(e);
+  }
 }
 
 void RecordingWindowStream::next(SimWindow& out) {
   const std::size_t S = std::size_t(opt_.window);
-  if (opt_.shuffle && (opt_.cursors > 1 || opt_.windows_per_visit > 1)) return next_from_cursor(out);
+  if (opt_.shuffle && (opt_.cursors > 1 || opt_.windows_per_visit > 1)) {
+    read_planned(plan_from_cursor(), out);
+    return;
+  }
   if (opt_.shuffle) {
     const std::size_t i = opt_.spread ? k_ % paths_.size() : hash64(seed_, 0x5c3e, k_) % paths_.size();
     Open& r = open(i);

@@ -5,6 +5,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,10 @@ class RecordingWindowStream {
   RecordingWindowStream(std::vector<std::string> paths, std::uint64_t seed, WindowStreamOptions options);
   ~RecordingWindowStream();
   void next(SimWindow& out);
+  // The next out.size() windows, equal to as many next() calls. With cursors, the windows of
+  // different cursors are read on up to `threads` threads at once: each cursor's file, reader
+  // and TORE are its own, and HDF5 (built thread-safe) serialises its calls.
+  void next_batch(std::span<SimWindow> out, int threads);
   void seek_window(std::uint64_t k);
   // Consecutive mode: the windows that fit in recording i.
   int windows_in(std::size_t i);
@@ -43,7 +48,15 @@ class RecordingWindowStream {
     std::size_t end = 0;  // the mask index after the last window served
   };
   std::vector<Cursor> cursors_;
-  void next_from_cursor(SimWindow& out);
+  // Where cursor mode's next window lies: the cursor's file opened (vetted) on a new visit,
+  // the window's first mask and whether the reader must seek to it.
+  struct Planned {
+    Open* open = nullptr;
+    std::size_t first = 0;
+    bool fresh = true;
+  };
+  Planned plan_from_cursor();
+  void read_planned(const Planned& p, SimWindow& out);
 };
 
 }  // namespace yelan::camera::sim

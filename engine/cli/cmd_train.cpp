@@ -54,7 +54,7 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
                {"--stage", "--config", "--sim", "--val-sim", "--data", "--val-data", "-o", "--steps", "--batch", "--epoch-steps", "--lr",
                 "--seed", "--mask-weights", "--init", "--checkpoint-minutes", "--max-minutes", "--max-cpu-minutes", "--threads", "--patience",
                 "--val-windows", "--lr-step-epochs", "--lr-schedule", "--warmup-steps", "--history", "--stop-at", "--mask-frames", "--empty-weight", "--dice-weight", "--mask-focus",
-                "--windows-per-visit", "--mask-reuse"},
+                "--windows-per-visit", "--mask-reuse", "--read-threads"},
                {"--occlusion", "--warp", "--flip", "--frame-zoom", "--swap-loss", "--resume", "--quiet", "--validate-start", "--freeze-bn"});
   a.expect_positionals(0, 0);
   const auto stage = a.value("--stage"), config = a.value("--config"), simv = a.value("--sim"), o = a.value("-o");
@@ -134,6 +134,8 @@ int cmd_train(const std::vector<std::string>& argv, std::ostream& out, std::ostr
   spec.history_s = a.number_or("--history", 5, 0, 60);
   spec.windows_per_visit = a.int_value_or("--windows-per-visit", 8, 1, 1 << 10);
   if (a.value("--windows-per-visit") && !data) throw UsageError("--windows-per-visit: for --data only (recordings on disk)");
+  spec.read_threads = a.int_value_or("--read-threads", 0, 1, 1024);
+  if (a.value("--read-threads") && !data) throw UsageError("--read-threads: for --data only (recordings on disk)");
   spec.occlusion = a.flag("--occlusion");
   spec.warp = a.flag("--warp");
   spec.flip = a.flag("--flip");

@@ -71,11 +71,12 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
   SwapShare swaps;
   std::set<std::string> picture_names;
   ErrorSplit split, split_floor;
+  // One window's buffers serve every window (its frames' TORE read-outs are 2 MB each).
+  sim::SimWindow win;
   // One scene or recording: `windows` windows from `next`, scored under `conditions`.
   auto score = [&](int windows, const std::function<void(sim::SimWindow&)>& next,
                    const std::map<std::string, std::string>& conditions, const std::string& scene_name) {
     for (int k = 0; k < windows; ++k) {
-      sim::SimWindow win;
       next(win);
       builder.clear();
       const Similarity zoom = framing_similarity(win, 0, cfg.window);

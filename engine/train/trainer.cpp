@@ -15,6 +15,7 @@
 #include <iomanip>
 #include <optional>
 #include <set>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -28,6 +29,7 @@
 #include "engine/losses.h"
 #include "engine/mask_net.h"
 #include "engine/pose_net.h"
+#include "engine/threads.h"
 #include "engine/train/batch.h"
 #include "weights_tools/network_io.h"
 #include "weights_tools/weights_file.h"
@@ -219,6 +221,10 @@ class WindowSource {
     else sim_ = std::make_unique<sim::SimWindowStream>(scenes, seed, o);
   }
   void next(sim::SimWindow& w) { rec_ ? rec_->next(w) : sim_->next(w); }
+  void next_batch(std::span<sim::SimWindow> ws, int threads) {
+    if (rec_) return rec_->next_batch(ws, threads);
+    for (sim::SimWindow& w : ws) sim_->next(w);
+  }
   void seek(std::uint64_t k) { rec_ ? rec_->seek_window(k) : sim_->seek_scene(k); }
 
  private:
@@ -470,11 +476,11 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     constexpr int kPer = 4;
     mask.set_training(false);
     std::set<std::string> sources;
+    sim::SimWindow w;
     for (int i = 0; i < spec.val_windows; i += kPer) {
       const int n = std::min(kPer, spec.val_windows - i);
       val_batches.push_back(std::make_unique<BatchBuilder>(cfg, n, builder.source(), lead));
       for (int k = 0; k < n; ++k) {
-        sim::SimWindow w;
         vs.next(w);
         sources.insert(w.scene);
         const auto reuse = reuse_of(kValReuse + std::uint64_t(i + k));
@@ -491,6 +497,19 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     std::array<double, 3> mask_iou{-1, -1, -1};  // at sigmoid > kCuts: is yelan run's cut (the first) well placed?
   };
   static constexpr std::array<float, 3> kCuts{input::kMaskCut, 0.3f, 0.5f};
+  // What a validation adds to its log line: MPJPE (pose stage) or the mask IoU at every cut.
+  auto score_text = [](const ValScore& v) {
+    std::string t;
+    if (v.mpjpe_mm >= 0) t += ", validation MPJPE " + std::to_string(int(std::lround(v.mpjpe_mm))) + " mm";
+    if (v.mask_iou[0] >= 0) {
+      t += ", validation mask IoU " + std::to_string(v.mask_iou[0]).substr(0, 5) + " (at sigmoid > " +
+           std::to_string(kCuts[0]).substr(0, 3) + "; ";
+      for (std::size_t k = 1; k < kCuts.size(); ++k)
+        t += (k > 1 ? ", " : "") + std::to_string(kCuts[k]).substr(0, 3) + ": " + std::to_string(v.mask_iou[k]).substr(0, 5);
+      t += ")";
+    }
+    return t;
+  };
   // Mean loss of the net in eval mode over the validation windows, and what a reader
   // understands: for the pose stage MPJPE in mm (paper protocol), for the mask stage the IoU
   // of the current mask, cut where yelan run cuts it, against the true one.
@@ -559,21 +578,21 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     write_log_row(log, {0, adam.epochs(), -1, v.loss, cosine ? scheduled_lr(spec, 0) : adam.lr(), 0, 0,
                         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), v.mpjpe_mm, cpu,
                         v.mask_iou[0]});
-    err << "step 0 (the start): validation " << v.loss
-        << (v.mpjpe_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(v.mpjpe_mm))) + " mm" : "")
-        << (v.mask_iou[0] >= 0 ? ", validation mask IoU " + std::to_string(v.mask_iou[0]).substr(0, 5) : "") << "\n";
+    err << "step 0 (the start): validation " << v.loss << score_text(v) << "\n";
   }
   const std::int64_t first_step = st.step;
   double data_s = 0, step_s = 0;  // since the last epoch line: building batches, whole steps
   std::int64_t swap_groups = 0, swapped = 0;  // --swap-loss: windows scored, and of them traded, since then
-  // One window's buffers serve every window: its frames' TORE read-outs (2 MB each at the
-  // sensor's size) allocated afresh each time cost the kernel's page clearing and faults.
-  sim::SimWindow w;
+  // A batch's window buffers serve every batch: their frames' TORE read-outs (2 MB each at
+  // the sensor's size) allocated afresh each time cost the kernel's page clearing and faults.
+  // The windows are read from their recordings in parallel, then batched in order.
+  std::vector<sim::SimWindow> windows(std::size_t(spec.batch));
   while (st.step < spec.steps && !result.early_stopped) {
     const auto t0 = std::chrono::steady_clock::now();
     builder.clear();
+    stream.next_batch(windows, spec.read_threads > 0 ? spec.read_threads : threads());
     for (int b = 0; b < spec.batch; ++b) {
-      stream.next(w);
+      const sim::SimWindow& w = windows[std::size_t(b)];
       sim::Rng occ(spec.seed, 0x0cc1u + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
       // Its own stream, so the occluders of a run with --warp are those of one without.
       sim::Rng wr(spec.seed, 0x3a9fu + std::uint64_t(st.step) * 4096 + std::uint64_t(b));
@@ -622,19 +641,12 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double sps = spec.batch * tcfg.window / dt;
     double val = -1, val_mm = -1, val_iou = -1;
-    std::string iou_text;
+    std::string scores;
     const bool epoch_end = st.step % spec.steps_per_epoch == 0 || st.step == spec.steps;
     if (epoch_end) {
       const ValScore v = validate();
       val = v.loss, val_mm = v.mpjpe_mm, val_iou = v.mask_iou[0];
-      if (val_iou >= 0) {
-        iou_text = ", validation mask IoU " + std::to_string(val_iou).substr(0, 5) + " (at sigmoid > " +
-                   std::to_string(kCuts[0]).substr(0, 3) + "; ";
-        for (std::size_t k = 1; k < kCuts.size(); ++k)
-          iou_text += (k > 1 ? ", " : "") + std::to_string(kCuts[k]).substr(0, 3) + ": " +
-                      std::to_string(v.mask_iou[k]).substr(0, 5);
-        iou_text += ")";
-      }
+      scores = score_text(v);
       adam.end_epoch();
       if (cosine) adam.set_lr(scheduled_lr(spec, st.step));
       const double crit = pose_stage ? val_mm : val;  // pose: selected by validation MPJPE (mm)
@@ -656,9 +668,7 @@ TrainResult train(const TrainSpec& spec, std::ostream& err) {
           << std::flush;
     if (epoch_end)
       err << (spec.progress_tty ? "\n" : "") << "epoch " << adam.epochs() << " step " << st.step << ": loss " << loss
-          << ", validation " << val << " (best " << st.best_val << ")"
-          << (val_mm >= 0 ? ", validation MPJPE " + std::to_string(int(std::lround(val_mm))) + " mm" : "")
-          << iou_text
+          << ", validation " << val << " (best " << st.best_val << ")" << scores
           << (swap_groups ? ", " + std::to_string(std::lround(100.0 * double(swapped) / double(swap_groups))) + "% of windows traded" : "")
           << ", " << sps
           << " samples/s, lr " << adam.lr() << ", data " << std::lround(100 * data_s / std::max(step_s, 1e-9))

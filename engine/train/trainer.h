@@ -52,6 +52,9 @@ struct TrainSpec {
   // (a mask window of 1 frame spans 16 frames of a 245-frame recording, so 15 fit); fewer
   // renew a batch's recordings more often.
   int windows_per_visit = 8;
+  // Threads reading a batch's windows from their recordings at once (0: the engine's thread
+  // count; 1: one after another). The same windows, value for value, either way.
+  int read_threads = 0;
   double checkpoint_minutes = 10;
   bool occlusion = false;           // random rectangles (10-80 px) zeroed in the input
   bool warp = false;                // a random similarity per window, input and targets (augment.h)
