@@ -833,7 +833,7 @@ case "$what" in
     dir=$RUNS/sk-s56-q12-dancers
     s56_dancers "$dir" 2
     if [ ! -f "$RUNS/ev-s64/checkpoint.state" ] && [ -f models/campaign/ev-s64/checkpoint.state ]; then
-      mkdir -p "$RUNS/ev-s64" && cp models/campaign/ev-s64/{checkpoint.h5,checkpoint.state,log.csv} "$RUNS/ev-s64/"
+      mkdir -p "$RUNS/ev-s64" && cp models/campaign/ev-s64/{checkpoint.h5,checkpoint.state,log.csv,run.json} "$RUNS/ev-s64/"
     fi
     CFG=$STICK_CFG0 DATA=$dir THREADS=${THREADS:-2} train pose ev-s64 "${EV_S64_STEPS:-4000}" --val-data "$DATA_SK_FP2/val" \
       --lr 1e-3 --seed 18 --init models/campaign/sk-sided/checkpoint.h5 --validate-start ;;

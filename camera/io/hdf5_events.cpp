@@ -4,10 +4,14 @@
 // Read in row blocks, so memory stays bounded whatever the file size.
 #include <algorithm>
 #include <array>
+#include <climits>
+#include <cstring>
 #include <filesystem>
+#include <type_traits>
 
 #include "camera/io/event_writer.h"
 #include "camera/io/h5.h"
+#include "camera/io/h5_chunks.h"
 #include "camera/io/readers.h"
 
 namespace yelan::camera {
@@ -19,6 +23,32 @@ constexpr std::uint64_t kMaxChunkBytes = 64u << 20;
 constexpr int kOurVersion = 1;
 // ms_to_idx holds one entry per millisecond: 100 M entries (800 MB) is 27.8 hours.
 constexpr std::int64_t kMaxIndexedSpanUs = 100'000'000'000LL;
+
+// Elements of a little-endian integer column as int64, as H5Dread converts them (an unsigned
+// value past INT64_MAX saturates).
+void widen(const unsigned char* raw, std::size_t size, bool is_signed, std::size_t n, std::int64_t* out) {
+  auto each = [&](auto type_tag) {
+    using T = decltype(type_tag);
+    for (std::size_t i = 0; i < n; ++i) {
+      T v;
+      std::memcpy(&v, raw + i * sizeof(T), sizeof(T));
+      if constexpr (std::is_same_v<T, std::uint64_t>)
+        out[i] = v > std::uint64_t(INT64_MAX) ? INT64_MAX : std::int64_t(v);
+      else
+        out[i] = std::int64_t(v);
+    }
+  };
+  switch (size * 2 + (is_signed ? 1 : 0)) {
+    case 2: return each(std::uint8_t{});
+    case 3: return each(std::int8_t{});
+    case 4: return each(std::uint16_t{});
+    case 5: return each(std::int16_t{});
+    case 8: return each(std::uint32_t{});
+    case 9: return each(std::int32_t{});
+    case 16: return each(std::uint64_t{});
+    default: return each(std::int64_t{});
+  }
+}
 
 class Hdf5Reader final : public EventReader {
  public:
@@ -48,14 +78,16 @@ class Hdf5Reader final : public EventReader {
 
   bool decode(std::vector<Event>& out) override {
     if (next_ >= rows_) return false;
-    const hsize_t n = std::min(kRowsPerRead, rows_ - next_);
+    hsize_t n = std::min(kRowsPerRead, rows_ - next_);
+    if (!raw_.empty()) n = std::min(n, raw_rows_ - next_ % raw_rows_);  // within one chunk
     for (auto& c : cols_) c.resize(n);
     try {
       for (int k = 0; k < (matrix_.valid() ? 1 : 4); ++k)
         h5::check_stored_chunks(column_ds(k), next_, n, size_, kMaxChunkBytes);
       for (int k = 0; k < 4; ++k)
-        h5::read_rows(column_ds(k), H5T_NATIVE_INT64, next_, n, cols_[static_cast<std::size_t>(k)].data(),
-                      matrix_.valid() ? matrix_col_[static_cast<std::size_t>(k)] : -1);
+        if (raw_.empty() || !read_raw(k, n))
+          h5::read_rows(column_ds(k), H5T_NATIVE_INT64, next_, n, cols_[static_cast<std::size_t>(k)].data(),
+                        matrix_.valid() ? matrix_col_[static_cast<std::size_t>(k)] : -1);
     } catch (const h5::H5Failure& e) {
       throw FormatError(path_, 0, "rows " + std::to_string(next_) + ".." + std::to_string(next_ + n) +
                                       ": " + e.what() + " (corrupt chunk?)");
@@ -98,6 +130,37 @@ class Hdf5Reader final : public EventReader {
 
  private:
   hid_t column_ds(int k) const { return matrix_.valid() ? matrix_.get() : columns_[static_cast<std::size_t>(k)].get(); }
+
+  // Rows [next_, next_ + n) of column k (inside one chunk) from its chunk inflated here, the
+  // chunk kept for the next rows; false where the chunk was never written.
+  bool read_raw(int k, hsize_t n) {
+    RawColumn& c = raw_[static_cast<std::size_t>(k)];
+    const hsize_t chunk = next_ / raw_rows_;
+    if (c.cached != chunk) {
+      const hsize_t coord = chunk * raw_rows_;
+      c.cached = ~hsize_t(0);
+      if (!c.reader.read(column_ds(k), &coord, c.bytes)) return false;
+      c.cached = chunk;
+    }
+    const std::size_t size = c.reader.element_bytes();
+    widen(c.bytes.data() + (next_ - chunk * raw_rows_) * size, size, c.is_signed, n,
+          cols_[static_cast<std::size_t>(k)].data());
+    return true;
+  }
+
+  // The four columns through RawChunkReader where each suits it and all share one chunk length.
+  void use_raw_chunks() {
+    std::vector<RawColumn> raw;
+    for (int k = 0; k < 4; ++k) {
+      const hid_t ds = column_ds(k);
+      if (!h5::RawChunkReader::suits(ds)) return;
+      h5::H5Id type = h5::check(H5Dget_type(ds), "column type");
+      raw.push_back({h5::RawChunkReader(ds), H5Tget_sign(type.get()) == H5T_SGN_2, ~hsize_t(0), {}});
+      if (raw.back().reader.chunk().size() != 1 || raw.back().reader.chunk()[0] != raw[0].reader.chunk()[0]) return;
+    }
+    raw_rows_ = raw[0].reader.chunk()[0];
+    raw_ = std::move(raw);
+  }
 
   void classify() {
     const hid_t f = file_.get();
@@ -180,6 +243,7 @@ class Hdf5Reader final : public EventReader {
         throw FormatError(path_, 0, "/" + name + " has " + std::to_string(dims[0]) + " rows but /" + group +
                                         "/t has " + std::to_string(rows_));
     }
+    use_raw_chunks();
   }
 
   void open_ms_index(const std::string& name) {
@@ -199,6 +263,14 @@ class Hdf5Reader final : public EventReader {
   std::array<H5Id, 4> columns_;
   std::array<int, 4> matrix_col_{0, 1, 2, 3};
   std::array<std::vector<std::int64_t>, 4> cols_;
+  struct RawColumn {
+    h5::RawChunkReader reader;
+    bool is_signed = false;
+    hsize_t cached = ~hsize_t(0);  // the chunk held in bytes
+    std::vector<unsigned char> bytes;
+  };
+  std::vector<RawColumn> raw_;  // empty: the columns go through H5Dread
+  hsize_t raw_rows_ = 0;
   hsize_t rows_ = 0, next_ = 0, ms_len_ = 0;
   std::int64_t t_offset_ = 0, ms_origin_ = 0;
   std::uint64_t size_ = 0;

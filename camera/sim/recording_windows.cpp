@@ -5,9 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <exception>
+#include <optional>
 #include <stdexcept>
 
 #include "camera/io/event_reader.h"
+#include "camera/io/h5_chunks.h"
 #include "camera/sim/rng.h"
 
 namespace yelan::camera::sim {
@@ -23,6 +25,7 @@ struct RecordingWindowStream::Open {
   ToreVolume tore;
   std::vector<float> counts;
   std::vector<Event> buf;
+  std::optional<h5::RawChunkReader> mask_chunks;  // where each mask is one stored chunk of bytes
   std::size_t first_mask = 0;  // the first mask time with warmup_s of events before it
   std::size_t index = 0;
 
@@ -40,6 +43,13 @@ struct RecordingWindowStream::Open {
     if (dims.size() != 3 || dims[0] != info.mask_t.size() || dims[1] != hsize_t(info.camera.height) ||
         dims[2] != hsize_t(info.camera.width))
       fail(info.path, "masks/data is not (masks/t rows) x height x width");
+    if (h5::RawChunkReader::suits(masks.get())) {
+      h5::H5Id type = h5::check(H5Dget_type(masks.get()), info.path + ": masks/data type");
+      h5::RawChunkReader r(masks.get());
+      if (r.element_bytes() == 1 && H5Tget_class(type.get()) == H5T_INTEGER && H5Tget_sign(type.get()) == H5T_SGN_NONE &&
+          r.chunk() == std::vector<hsize_t>{1, dims[1], dims[2]})
+        mask_chunks.emplace(std::move(r));
+    }
     const std::int64_t dt = std::llround(1e6 / o.frame_hz);
     const std::int64_t spacing = info.mask_t[1] - info.mask_t[0];
     if (std::llabs(spacing - dt) > 2)
@@ -72,8 +82,14 @@ struct RecordingWindowStream::Open {
   }
 
   void read_mask(std::size_t m, std::vector<std::uint8_t>& out) {
+    const hsize_t start[3] = {hsize_t(m), 0, 0};
+    try {
+      if (mask_chunks && mask_chunks->read(masks.get(), start, out)) return;
+    } catch (const h5::H5Failure& e) {
+      throw h5::H5Failure(info.path + ": read mask " + std::to_string(m) + ": " + e.what());
+    }
     out.resize(std::size_t(info.camera.width) * info.camera.height);
-    const hsize_t start[3] = {hsize_t(m), 0, 0}, count[3] = {1, hsize_t(info.camera.height), hsize_t(info.camera.width)};
+    const hsize_t count[3] = {1, hsize_t(info.camera.height), hsize_t(info.camera.width)};
     h5::H5Id fspace = h5::check(H5Dget_space(masks.get()), "dataspace");
     h5::check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select mask");
     h5::H5Id mspace = h5::check(H5Screate_simple(3, count, nullptr), "dataspace");
@@ -187,7 +203,7 @@ void RecordingWindowStream::read_planned(const Planned& p, SimWindow& out) {
 }
 
 void RecordingWindowStream::next_batch(std::span<SimWindow> out, int threads) {
-  if (!opt_.shuffle || (opt_.cursors == 1 && opt_.windows_per_visit == 1) || threads <= 1) {
+  if (!cursor_mode() || opt_.cursors == 1 || threads <= 1) {
     for (SimWindow& w : out) next(w);
     return;
   }
@@ -215,7 +231,7 @@ void RecordingWindowStream::next_batch(std::span<SimWindow> out, int threads) {
 
 void RecordingWindowStream::next(SimWindow& out) {
   const std::size_t S = std::size_t(opt_.window);
-  if (opt_.shuffle && (opt_.cursors > 1 || opt_.windows_per_visit > 1)) {
+  if (cursor_mode()) {
     read_planned(plan_from_cursor(), out);
     return;
   }

@@ -55,6 +55,8 @@ class RecordingWindowStream {
     std::size_t first = 0;
     bool fresh = true;
   };
+  // Shuffled windows through cursors (several, or several windows a visit): plan_from_cursor.
+  bool cursor_mode() const { return opt_.shuffle && (opt_.cursors > 1 || opt_.windows_per_visit > 1); }
   Planned plan_from_cursor();
   void read_planned(const Planned& p, SimWindow& out);
 };
