@@ -1697,10 +1697,6 @@ TEST_CASE("run: the deployed head depth is averaged over the ticks with a person
     aged += p.mask_age > 0;
   }
   CHECK(aged > int(reused.poses.size()) / 2);
-  // --poses is the deployed path's: refused without --run, before any work.
-  const auto refused = run_cli({"eval", "--weights", d / "w.h5", "--sim", "test", "--poses", d / "p.csv"});
-  CHECK(refused.code == 2);
-  CHECK(contains(refused.err, "--poses is for eval --run"));
   CHECK(run_cli({"run", "--weights", d / "w.h5", "x.aedat4", "--depth-tau", "-1"}).code == 2);
   CHECK(run_cli({"run", "--weights", d / "w.h5", "x.aedat4", "--pose-tau", "-1"}).code == 2);
 }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -441,6 +442,55 @@ TEST_CASE("train: --data DIR trains on recordings split by recording, resumes bi
   const std::string js = yelan::test::slurp(d / "eval.json");
   for (const char* key : {"\"mpjpe_mm\"", "\"frames\": 20", "\"occluded\"", "\"left\"", "\"scenes\": 2"})
     CHECK(yelan::test::contains(js, key));
+  // --poses: every scored frame, the prediction and the label; their errors are eval's MPJPE.
+  const auto kept = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--data", d / "rec", "--seconds", "0.2",
+                                          "--no-floors", "--poses", d / "frames.csv"});
+  INFO(kept.err);
+  REQUIRE(kept.code == 0);
+  std::istringstream csv(yelan::test::slurp(d / "frames.csv"));
+  std::string line;
+  std::getline(csv, line);
+  {
+    std::vector<std::string> head;
+    std::istringstream l(line);
+    for (std::string f; std::getline(l, f, ',');) head.push_back(f);
+    REQUIRE(head.size() == 10 + 2 * 39 + 13 + 2);
+    CHECK(line.rfind("source,view,window,frame,t_us,fx,fy,cx,cy,true_head_depth_mm,j0_x,", 0) == 0);
+    CHECK(head[49] == "true_j0_x");  // the prediction first, then the label
+    CHECK(head[88] == "valid0");
+    CHECK(head[102] == "height");
+  }
+  double sum = 0;
+  int rows = 0, joints = 0;
+  std::set<std::string> sources;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> c;
+    std::istringstream l(line);
+    for (std::string f; std::getline(l, f, ',');) c.push_back(f);
+    REQUIRE(c.size() == 10 + 2 * 39 + 13 + 2);
+    CHECK(c[101] == "346");
+    CHECK(c[102] == "260");
+    ++rows;
+    sources.insert(c[0] + "/" + c[1]);
+    CHECK(std::stod(c[5]) > 100);  // fx
+    for (int j = 0; j < 13; ++j) {
+      if (c[10 + 78 + j] != "1") continue;
+      double e = 0;
+      for (int a = 0; a < 3; ++a) e += std::pow(std::stod(c[10 + 3 * j + a]) - std::stod(c[10 + 39 + 3 * j + a]), 2);
+      sum += std::sqrt(e);
+      ++joints;
+    }
+  }
+  CHECK(rows == 20);
+  CHECK(sources == std::set<std::string>{"ben-dance3-front-high-static/front", "ana-05_04-left-medium-dynamic-occluded/left"});
+  REQUIRE(joints > 0);
+  CHECK(sum / joints == Approx(nlohmann::json::parse(js)["mpjpe_mm"].get<double>()).epsilon(1e-4));
+  // With --run, --poses keeps the deployed path's own layout.
+  const auto deployed = yelan::test::run_cli({"eval", "--run", "--weights", d / "a/final.h5", "--data", d / "rec",
+                                              "--seconds", "0.3", "--skip", "0", "--poses", d / "run.csv"});
+  INFO(deployed.err);
+  REQUIRE(deployed.code == 0);
+  CHECK(yelan::test::slurp(d / "run.csv").rfind("source,t_us,dancer,person,confidence,mask_ran,", 0) == 0);
   // Pictures of stage 1 against the truth, one per recording; not where stage 1 does not run.
   const auto pics = yelan::test::run_cli({"eval", "--weights", d / "a/final.h5", "--data", d / "rec", "--seconds", "0.2",
                                           "--no-floors", "--mask-pictures", d / "pics"});

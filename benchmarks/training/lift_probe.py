@@ -20,6 +20,9 @@ import sys
 import h5py
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from refine_probe import fit, mlp  # noqa: E402  (the probes' MLP and its training loop)
+
 VIEWS = ("front", "back", "left", "right")
 
 
@@ -74,31 +77,18 @@ def main(argv):
             floor[vv == v] = zt[vt == v].mean(axis=0) if (vt == v).any() else zt.mean(axis=0)
     print(f"per-view mean pose, depth hip-aligned: {np.abs(floor - zv).mean():.1f} mm a joint")
     print(f"training mean pose: {np.abs(zt.mean(axis=0) - zv).mean():.1f} mm")
-    net = torch.nn.Sequential(torch.nn.Linear(26, 512), torch.nn.ReLU(), torch.nn.Dropout(0.1),
-                              torch.nn.Linear(512, 512), torch.nn.ReLU(), torch.nn.Dropout(0.1),
-                              torch.nn.Linear(512, 13))
+    net = mlp(26, 13, 512)
     X, Z = torch.tensor(xt / 1000, dtype=torch.float32), torch.tensor(zt / 1000, dtype=torch.float32)
     M = torch.tensor(mt[:, None] * o.noise_px / 1000, dtype=torch.float32)
     Xv = torch.tensor(xv / 1000, dtype=torch.float32)
-    opt = torch.optim.Adam(net.parameters(), 1e-3)
-    sched = torch.optim.lr_scheduler.CosineAnnealingLR(opt, o.epochs)
-    for epoch in range(o.epochs):
-        net.train()
-        perm = torch.randperm(len(X))
-        for i in range(0, len(X), 256):
-            b = perm[i:i + 256]
-            loss = (net(X[b] + torch.randn(len(b), 26) * M[b]) - Z[b]).abs().mean()
-            opt.zero_grad()
-            loss.backward()
-            opt.step()
-        sched.step()
-        if epoch % 10 == 9 or epoch == o.epochs - 1:
-            net.eval()
-            with torch.no_grad():
-                pred = net(Xv).numpy() * 1000
-            err = np.abs(pred - zv).mean(axis=0)
-            print(f"epoch {epoch + 1}: depth hip-aligned {err.mean():.1f} mm a joint on validation "
-                  f"(train loss {1000 * loss.item():.1f}); per joint " + " ".join(f"{e:.0f}" for e in err))
+
+    def scored(epoch, loss):
+        with torch.no_grad():
+            pred = net(Xv).numpy() * 1000
+        err = np.abs(pred - zv).mean(axis=0)
+        print(f"epoch {epoch + 1}: depth hip-aligned {err.mean():.1f} mm a joint on validation "
+              f"(train loss {1000 * loss:.1f}); per joint " + " ".join(f"{e:.0f}" for e in err))
+    fit(net, len(X), lambda b: (net(X[b] + torch.randn(len(b), 26) * M[b]) - Z[b]).abs().mean(), o.epochs, scored)
 
 
 if __name__ == "__main__":

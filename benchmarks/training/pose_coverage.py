@@ -11,9 +11,13 @@ Printed per motion family (CMU clip or procedural dance), beside the per-view me
 of the training poses (the floor yelan eval prints, here on these poses). --eval E.json (the
 `yelan eval --json` of a net on the query recordings, scored over their first --seconds):
 per recording, how the net's root-aligned error follows the lookup's distance and the floor.
+--poses P.csv (`yelan eval --poses` of a net on the query recordings): the same frame by frame,
+each scored frame with all 13 joints valid against its own lookup (camera frame, same view),
+by quartile of the lookup's distance. --shares: the lookup from 1/16, 1/8, ... of the
+training recordings (drawn with --seed): how the coverage grows with recordings.
 
 usage: pose_coverage.py --train DIR [DIR...] --query DIR [--label-step 10] [--query-step 6]
-                        [--seconds S] [--eval E.json ...]
+                        [--seconds S] [--eval E.json ...] [--poses P.csv] [--shares] [--seed 1]
 """
 import argparse
 import json
@@ -82,7 +86,8 @@ def nearest_mpjpe(train, query, shortlist=16, chunk=512):
         q = query[i:i + chunk]
         Q = q.reshape(len(q), -1)
         d2 = (Q * Q).sum(1)[:, None] - 2 * Q @ T.T + tn[None, :]
-        idx = np.argpartition(d2, shortlist, axis=1)[:, :shortlist]
+        k = min(shortlist, len(train) - 1)
+        idx = np.argpartition(d2, k, axis=1)[:, :k + 1]
         cand = train[idx]  # (m, k, 13, 3)
         err = np.linalg.norm(cand - q[:, None], axis=3)  # (m, k, 13)
         m = err.mean(axis=2)
@@ -100,9 +105,12 @@ def main():
     ap.add_argument("--query-step", type=int, default=6, help="every n-th query label")
     ap.add_argument("--seconds", type=float, help="only the query recordings' first seconds")
     ap.add_argument("--eval", nargs="*", default=[], help="yelan eval --json of nets on the query recordings")
+    ap.add_argument("--poses", help="yelan eval --poses CSV of a net on the query recordings")
+    ap.add_argument("--shares", action="store_true", help="the lookup from shares of the training recordings")
+    ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     parts = [load(d, a.label_step) for d in a.train]
-    tc, tb, tv = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    tc, tb, tv, _, tr = (np.concatenate([p[i] for p in parts]) for i in range(5))
     qc, qb, qv, qf, qr = load(a.query, a.query_step, a.seconds)
     print(f"training poses {len(tc)} from {' '.join(a.train)}; query poses {len(qc)} from {a.query}")
     nn_cam = np.empty(len(qc)); nn_cam_h = np.empty(len(qc))
@@ -134,7 +142,54 @@ def main():
               f"correlation with the lookup's distance {np.corrcoef(net, nn)[0, 1]:.2f}, with the floor "
               f"{np.corrcoef(net, fl)[0, 1]:.2f}; net / lookup {np.median(net / nn):.2f}, net / floor {np.median(net / fl):.2f} "
               f"(medians)")
+    if a.poses:
+        frames_against_lookup(a.poses, tc, tv)
+    if a.shares:
+        # Nested shares: each holds the one before it, so the curve is one draw growing.
+        recs = np.random.default_rng(a.seed).permutation(np.unique(tr))
+        for share in (16, 8, 4, 2, 1):
+            n = max(1, len(recs) // share)
+            pick = np.isin(tr, recs[:n])
+            d = np.empty(len(qc))
+            for v in np.unique(qv):
+                sel, tsel = qv == v, pick & (tv == v)
+                d[sel] = nearest_mpjpe(tc[tsel], qc[sel])[0] if tsel.any() else np.nan
+            print(f"  the lookup from {n} of the {len(recs)} training recordings: {np.nanmean(d):.1f} mm")
     return 0
+
+
+def frames_against_lookup(path, tc, tv):
+    """The net's root-aligned error frame by frame beside each frame's lookup distance."""
+    import csv
+    with open(path, newline="") as f:
+        rows = csv.reader(f)
+        head = next(rows)
+        if head[:4] != ["source", "view", "window", "frame"]:
+            sys.exit(f"{path}: not the CSV of yelan eval --poses (header {head[:4]})")
+        data = [r for r in rows if all(v == "1" for v in r[88:101])]
+    if not data:
+        sys.exit(f"{path}: no frame with all 13 joints valid")
+    views = np.array([r[1] for r in data])
+    v = np.array([r[10:88] for r in data], dtype=np.float64)
+    pred, truth = v[:, :39].reshape(-1, 13, 3), v[:, 39:].reshape(-1, 13, 3)
+    root = lambda p: p - 0.5 * (p[:, HIP_R] + p[:, HIP_L])[:, None, :]
+    pred, truth = root(pred), root(truth)
+    net = np.linalg.norm(pred - truth, axis=2).mean(axis=1)
+    nn = np.empty(len(truth))
+    for view in np.unique(views):
+        sel = views == view
+        if not (tv == view).any():
+            sys.exit(f"{path}: no training pose of the view '{view}' to look up")
+        nn[sel] = nearest_mpjpe(tc[tv == view], truth[sel])[0]
+    print(f"{path}: {len(net)} frames, the net {net.mean():.1f} mm root-aligned, the lookup {nn.mean():.1f}; "
+          f"frame by frame correlation {np.corrcoef(net, nn)[0, 1]:.2f}")
+    bins = np.digitize(nn, np.percentile(nn, [25, 50, 75]))
+    for k in range(4):
+        sel = bins == k
+        print(f"  quartile {k + 1} of the lookup's distance: lookup {nn[sel].mean():.1f} mm, the net {net[sel].mean():.1f} mm")
+    for view in np.unique(views):
+        sel = views == view
+        print(f"  {view}: lookup {nn[sel].mean():.1f} mm, the net {net[sel].mean():.1f} mm")
 
 
 if __name__ == "__main__":

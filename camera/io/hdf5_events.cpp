@@ -83,7 +83,8 @@ class Hdf5Reader final : public EventReader {
     for (auto& c : cols_) c.resize(n);
     try {
       for (int k = 0; k < (matrix_.valid() ? 1 : 4); ++k)
-        h5::check_stored_chunks(column_ds(k), next_, n, size_, kMaxChunkBytes);
+        if (raw_.empty() || raw_[static_cast<std::size_t>(k)].cached != next_ / raw_rows_)  // a kept chunk was checked
+          h5::check_stored_chunks(column_ds(k), next_, n, size_, kMaxChunkBytes);
       for (int k = 0; k < 4; ++k)
         if (raw_.empty() || !read_raw(k, n))
           h5::read_rows(column_ds(k), H5T_NATIVE_INT64, next_, n, cols_[static_cast<std::size_t>(k)].data(),

@@ -178,10 +178,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   if (a.value("--pose-bf16") && !a.flag("--run")) throw UsageError("--pose-bf16 is for eval --run (the deployed path)");
   if (a.flag("--no-early-exit") && !a.flag("--run"))
     throw UsageError("--no-early-exit is for eval --run (frame by frame, stage 1 runs on every frame)");
-  if (const auto p = a.value("--poses")) {
-    if (!a.flag("--run")) throw UsageError("--poses is for eval --run (the deployed path's poses)");
-    check_output("--poses", *p, {*wpath});
-  }
+  if (const auto p = a.value("--poses")) check_output("--poses", *p, {*wpath});
   if (const auto t = a.value("--threads")) {
     const auto n = parse_thread_count(*t);
     if (!n) throw UsageError("--threads '" + *t + "': expected 1..1024");
@@ -206,6 +203,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
   spec.framed = !a.flag("--unframed");
   spec.history_s = a.number_or("--history", 5, 0, 60);
   if (a.value("--mask-grow")) spec.mask_grow = a.int_value_or("--mask-grow", 0, 0, 64);
+  spec.keep_poses = a.value("--poses").has_value();
   if (data) {
     try {
       spec.recordings = camera::sim::list_recordings(*data);
@@ -242,6 +240,7 @@ int cmd_eval(const std::vector<std::string>& argv, std::ostream& out, std::ostre
     out << "wrote " << r.mask_pictures << " pictures of stage 1 against the truth to " << spec.mask_pictures
         << " (green: both, red: stage 1 alone, blue: the truth alone; the last frame of each recording's middle window)\n";
   if (const auto j = a.value("--json")) camera::write_file_atomically(*j, train::eval_json(r));
+  if (const auto p = a.value("--poses")) camera::write_file_atomically(*p, train::frame_poses_csv(r.poses));
   return kOk;
 }
 

@@ -191,7 +191,7 @@ const std::vector<Command>& commands() {
       {"eval", "MPJPE, PCK@150 and AUC of a model on a test set",
        "usage: yelan eval --weights W --sim test|PRESETS|--data DIR [--seed N] [--scenes M] [--seconds 1]\n"
        "                  [--true-mask] [--history 5] [--no-floors] [--unframed] [--low-light-dn DN] [--json OUT] [--threads T]\n"
-       "                  [--mask-pictures DIR] [--frame-zoom] [--mask-grow PX]\n"
+       "                  [--mask-pictures DIR] [--frame-zoom] [--mask-grow PX] [--poses CSV]\n"
        "       yelan eval --run --weights W --sim test|--data DIR [--seed N] [--scenes M] [--seconds 1] [--beta B | --no-early-exit]\n"
        "                 [--mask-max-age K] [--mask-crop-margin PX] [--bf16 on|off] [--pose-bf16 on|off] [--skip 0.5] [--json OUT]\n"
        "                  [--poses CSV] [--depth-tau S] [--pose-tau S] [--mask-grow PX]\n"
@@ -240,6 +240,9 @@ const std::vector<Command>& commands() {
        "--poses CSV writes every pose of the scored spans with what it was scored against:\n"
        "source, t_us, dancer, person, confidence, mask_ran, head_depth_mm, true_head_depth_mm,\n"
        "jJ_x/y/z as run (mm, camera frame; empty when no person), true_jJ_x/y/z, validJ.\n"
+       "Without --run, --poses CSV writes every scored frame: source, view, window, frame, t_us,\n"
+       "fx, fy, cx, cy, true_head_depth_mm, jJ_x/y/z (mm, camera frame, under the true head\n"
+       "depth), true_jJ_x/y/z, validJ, width, height (what a refiner over the net's output reads).\n"
        "Mask IoU (without --run) is pooled over every recording, a mask drawn where nobody is\n"
        "counting against it; mask_iou_by_condition.people.dancer is the dancers' alone.\n",
        cmd_eval, "evaluation (issue 7)"},

@@ -98,6 +98,9 @@ EvalResult evaluate(const EvalSpec& spec, std::ostream& err) {
           split_floor.add(floors->per_view_prediction(truth, view_name), truth, valid, b.k);
         }
         swaps.add(pred, b.truth_mm[std::size_t(t)], valid, view_name.empty() ? "unknown" : view_name);
+        if (spec.keep_poses)
+          res.poses.push_back({scene_name, view_name, /*window=*/k, /*frame=*/t, win.frames[std::size_t(t)].t_us,
+                               b.z_ref[std::size_t(t)], b.k, pred, truth, valid});
         const Pose13 swapped = swap_left_right(pred);
         const auto frame_error = [&](const Pose13& q) {
           double e = 0;
@@ -298,6 +301,26 @@ std::string eval_json(const EvalResult& r) {
   j["mask_iou_sensor_px"] = r.mask_iou_px >= 0 ? nlohmann::ordered_json(r.mask_iou_px) : nlohmann::ordered_json(nullptr);
   j["mask_iou_sensor_px_by_condition"] = by_condition(r.mask_iou_px_by_condition);
   return j.dump(2) + "\n";
+}
+
+std::string frame_poses_csv(const std::vector<FramePose>& poses) {
+  std::ostringstream o;
+  o << "source,view,window,frame,t_us,fx,fy,cx,cy,true_head_depth_mm";
+  for (const char* what : {"", "true_"})
+    for (int j = 0; j < kJoints; ++j)
+      for (const char* c : {"x", "y", "z"}) o << ',' << what << 'j' << j << '_' << c;
+  for (int j = 0; j < kJoints; ++j) o << ",valid" << j;
+  o << ",width,height\n" << std::setprecision(7);
+  for (const FramePose& p : poses) {
+    o << p.source << ',' << p.view << ',' << p.window << ',' << p.frame << ',' << p.t_us << ',' << p.k.fx << ',' << p.k.fy
+      << ',' << p.k.cx << ',' << p.k.cy << ',' << p.z_ref;
+    for (const Pose13* q : {&p.pred, &p.truth})
+      for (const auto& jt : *q)
+        for (double v : jt) o << ',' << v;
+    for (std::uint8_t v : p.valid) o << ',' << int(v);
+    o << ',' << p.k.width << ',' << p.k.height << '\n';
+  }
+  return o.str();
 }
 
 std::string eval_table(const EvalResult& r) {

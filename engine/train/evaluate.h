@@ -12,6 +12,7 @@
 #include "camera/sim/simulator.h"
 #include "engine/train/floors.h"
 #include "engine/train/metrics.h"
+#include "engine/train/pose_norm.h"
 
 namespace yelan::train {
 
@@ -35,6 +36,19 @@ struct EvalSpec {
   // where stage 1 does not run (true_mask, or a config whose stage 2 reads no mask).
   std::string mask_pictures;
   std::optional<int> mask_grow;  // instead of the model's run.mask_grow
+  bool keep_poses = false;       // fill EvalResult::poses (eval --poses)
+};
+
+// One scored frame (eval --poses): what a lifter or a refiner over the net's output trains on.
+struct FramePose {
+  std::string source;  // the scene's or recording's name
+  std::string view;    // its view, "" where unknown
+  int window = 0, frame = 0;  // the window's index in its scene, the frame's in the window
+  std::int64_t t_us = 0;
+  double z_ref = 0;    // the true head depth the prediction was denormalised with
+  Intrinsics k{};
+  Pose13 pred{}, truth{};
+  std::array<std::uint8_t, kJoints> valid{};
 };
 
 struct EvalResult {
@@ -63,6 +77,7 @@ struct EvalResult {
   ErrorSplitScores split;
   std::optional<ErrorSplitScores> split_per_view_floor;
   int mask_pictures = 0;  // PNGs written to EvalSpec::mask_pictures
+  std::vector<FramePose> poses;  // with EvalSpec::keep_poses, every scored frame in order
 };
 
 EvalResult evaluate(const EvalSpec& spec, std::ostream& err);
@@ -81,5 +96,9 @@ std::string pose_scores_json(const PoseScores& s);
 
 std::string eval_json(const EvalResult& r);
 std::string eval_table(const EvalResult& r);
+// The CSV of `eval --poses` (without --run): one row per frame, the camera's intrinsics, the
+// prediction (mm, camera frame, under the true head depth), the label, and the sensor's size
+// last (after validJ, so readers of the first 101 columns keep their indices).
+std::string frame_poses_csv(const std::vector<FramePose>& poses);
 
 }  // namespace yelan::train
