@@ -150,8 +150,8 @@ def main():
         for share in (16, 8, 4, 2, 1):
             n = max(1, len(recs) // share)
             pick = np.isin(tr, recs[:n])
-            d = np.empty(len(qc))
-            for v in np.unique(qv):
+            d = nn_cam if n == len(recs) else np.empty(len(qc))  # all of them: the lookup above
+            for v in np.unique(qv) if n < len(recs) else []:
                 sel, tsel = qv == v, pick & (tv == v)
                 d[sel] = nearest_mpjpe(tc[tsel], qc[sel])[0] if tsel.any() else np.nan
             print(f"  the lookup from {n} of the {len(recs)} training recordings: {np.nanmean(d):.1f} mm")
@@ -160,20 +160,14 @@ def main():
 
 def frames_against_lookup(path, tc, tv):
     """The net's root-aligned error frame by frame beside each frame's lookup distance."""
-    import csv
-    with open(path, newline="") as f:
-        rows = csv.reader(f)
-        head = next(rows)
-        if head[:4] != ["source", "view", "window", "frame"]:
-            sys.exit(f"{path}: not the CSV of yelan eval --poses (header {head[:4]})")
-        data = [r for r in rows if all(v == "1" for v in r[88:101])]
-    if not data:
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    import refine_probe  # its reader of `yelan eval --poses`
+    d = refine_probe.load(path)
+    whole = d["valid"].all(axis=1)
+    if not whole.any():
         sys.exit(f"{path}: no frame with all 13 joints valid")
-    views = np.array([r[1] for r in data])
-    v = np.array([r[10:88] for r in data], dtype=np.float64)
-    pred, truth = v[:, :39].reshape(-1, 13, 3), v[:, 39:].reshape(-1, 13, 3)
-    root = lambda p: p - 0.5 * (p[:, HIP_R] + p[:, HIP_L])[:, None, :]
-    pred, truth = root(pred), root(truth)
+    views = d["view"][whole]
+    pred, truth = refine_probe.rooted(d["pred"][whole]), refine_probe.rooted(d["truth"][whole])
     net = np.linalg.norm(pred - truth, axis=2).mean(axis=1)
     nn = np.empty(len(truth))
     for view in np.unique(views):

@@ -89,15 +89,13 @@ def rooted(p):
     return p - p[:, HIPS, :].mean(axis=1, keepdims=True)
 
 
-def features(d, inputs):
-    """Each frame's predicted pose relative to its hip centre, in metres (xy: image positions
-    scaled to the hip's depth, no depths)."""
+def image_features(d):
+    """Each frame's predicted image positions scaled to its hip's depth, relative to the hip,
+    in metres: the 2D skeleton without the net's depths (--inputs xy)."""
     p = d["pred"]
-    if inputs == "xy":
-        hip = p[:, HIPS, :].mean(axis=1)
-        xy = p[..., :2] / p[..., 2:3] * hip[:, None, 2:3] - hip[:, None, :2]
-        return xy.reshape(len(p), 26) / 1000
-    return rooted(p).reshape(len(p), 39) / 1000
+    hip = p[:, HIPS, :].mean(axis=1)
+    xy = p[..., :2] / p[..., 2:3] * hip[:, None, 2:3] - hip[:, None, :2]
+    return xy.reshape(len(p), 26) / 1000
 
 
 FRAME_US = 20000  # the evaluation's frames, 50 a second
@@ -196,8 +194,8 @@ def main(argv):
     else:
         enc = lambda d, p: rooted(p).reshape(-1, 39) / 1000
         back = lambda d, q: q.reshape(-1, 13, 3) * 1000
-    xt = with_context(features(tr, o.inputs) if o.inputs == "xy" else enc(tr, tr["pred"]), tr, o.context)
-    xv = with_context(features(va, o.inputs) if o.inputs == "xy" else enc(va, va["pred"]), va, o.context)
+    xt = with_context(image_features(tr) if o.inputs == "xy" else enc(tr, tr["pred"]), tr, o.context)
+    xv = with_context(image_features(va) if o.inputs == "xy" else enc(va, va["pred"]), va, o.context)
     yt = enc(tr, tr["truth"])
     # The net's own pose is the starting point the MLP corrects (xyz inputs): a residual.
     base_t = enc(tr, tr["pred"]) if o.inputs == "xyz" else np.zeros_like(yt)
